@@ -1,0 +1,104 @@
+"""Command line: `hoseline solve problem.toml -o out/` and `hoseline demo`.
+
+Exit codes: 0 success, 2 bad input (problem file, paths), 3 the solver failed.
+On an error nothing is written.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+from rich.text import Text
+
+from hoseline.demo import run_demo
+from hoseline.io.problem_file import ProblemFileError, load_problem
+from hoseline.io.results import write_results
+from hoseline.procedures import placement
+from hoseline.report.table import summary_table
+
+BAD_INPUT = 2
+SOLVER_FAILED = 3
+
+app = typer.Typer(
+    help="Where a flexible hose lies between two mounts.", no_args_is_help=True, add_completion=False
+)
+
+OUT_HELP = "output directory (created; files of the same name are replaced)"
+QUIET_HELP = "no progress bar and no summary; errors are still printed"
+
+
+def _fail(message: str, code: int) -> typer.Exit:
+    """Print one red line on stderr and return the exit to raise."""
+    Console(stderr=True).print(Text(f"error: {message}", style="red"), soft_wrap=True)
+    return typer.Exit(code)
+
+
+@contextmanager
+def _progress(quiet: bool) -> Iterator[Callable[[str, float], None] | None]:
+    """A progress(phase, fraction) callback drawing one Rich bar per phase, or None when quiet."""
+    if quiet:
+        yield None
+        return
+    columns = (TextColumn("{task.description:<18}"), BarColumn(), TaskProgressColumn(), TimeElapsedColumn())
+    with Progress(*columns, console=Console(stderr=True)) as bar:
+        tasks: dict[str, int] = {}
+
+        def report(phase: str, fraction: float) -> None:
+            if phase not in tasks:
+                tasks[phase] = bar.add_task(phase, total=1.0)
+            bar.update(tasks[phase], completed=min(max(fraction, 0.0), 1.0))
+
+        yield report
+
+
+@contextmanager
+def _errors_to_exit_codes(out_dir: Path) -> Iterator[None]:
+    """Turn the expected failures into one red line and an exit code."""
+    try:
+        yield
+    except placement.PlacementError as exc:
+        raise _fail(f"the solver failed: {exc}", SOLVER_FAILED) from None
+    except OSError as exc:
+        raise _fail(f"cannot write to {out_dir}: {exc}", BAD_INPUT) from None
+
+
+@app.command("solve")
+def solve_command(
+    problem_file: Path = typer.Argument(..., help="TOML problem file (see README)"),
+    out: Path = typer.Option(..., "-o", "--out", help=OUT_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
+) -> None:
+    """Place the hose of a problem file; write centerline.csv and result.json."""
+    try:
+        problem = load_problem(problem_file)
+    except ProblemFileError as exc:
+        raise _fail(str(exc), BAD_INPUT) from None
+    except OSError as exc:
+        raise _fail(f"cannot read problem file {problem_file}: {exc.strerror or exc}", BAD_INPUT) from None
+
+    with _errors_to_exit_codes(out):
+        with _progress(quiet) as progress:
+            result = placement.solve(problem, progress=progress)
+        write_results(result, out)
+    if not quiet:
+        Console().print(summary_table([result], [problem.name]))
+        Console().print(f"wrote {out / 'centerline.csv'} and {out / 'result.json'}")
+
+
+@app.command("demo")
+def demo_command(
+    out: Path = typer.Option(Path("out/demo"), "-o", "--out", help=OUT_HELP),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
+) -> None:
+    """Place the thesis brake hose at 0 and 180 degrees of twist; write results and shapes.png."""
+    with _errors_to_exit_codes(out):
+        with _progress(quiet) as progress:
+            labels, results = run_demo(out, progress=progress)
+    if not quiet:
+        Console().print(summary_table(results, labels, title="thesis brake hose (Goodyear5052, 330.6 mm)"))
+        Console().print(f"wrote {out}/ (twist_000/, twist_180/, shapes.png)")

@@ -1,0 +1,438 @@
+"""Read and write problem files (TOML) with messages that name the field, the value and the fix.
+
+The format, in the units of a hose catalogue (mm, N*mm^2, kg/m, degrees, m/s^2)::
+
+    name = "optional text"
+    [hose]
+    length = 330.6                   # mm
+    outer_diameter = 10.1            # mm
+    bending_stiffness = 149563.0     # EI, N*mm^2 (or youngs_modulus, N/mm^2, with
+                                     #   outer_diameter and optional inner_diameter, mm)
+    torsional_stiffness = 2454930.0  # GJ, N*mm^2, optional (or torsion_factor)
+    mass_per_length = 0.0            # kg/m, optional
+    min_bend_radius = 50.0           # mm, optional, to the inside of the bend
+    segments = 100                   # optional, >= 4
+    [start]
+    point = [-13.0, 0.0, -11.25]     # mm
+    direction = [0.0, 1.0, 0.0]      # from the fitting into the hose
+    [end]
+    point = [-173.064, -7.0, -11.25]
+    direction = [1.0, 0.0, 0.0]      # from the fitting into the hose
+    twist = 180.0                    # degrees, optional
+    [environment]
+    gravity = [0.0, 0.0, -9.81]      # m/s^2, optional
+
+Exactly one of bending_stiffness / youngs_modulus.  At most one of
+torsional_stiffness / torsion_factor; without either, torsion_factor = 1, the
+isotropic GJ = EI / (1 + poisson_ratio) with poisson_ratio 0.5 unless given.
+Real hoses are often much stiffer in torsion (the thesis calibrates 25x).
+bending_stiffness_2 (N*mm^2, optional) is EI about the second section axis.
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import pydantic
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
+
+from hoseline.model.hose import (
+    DEFAULT_POISSON_RATIO,
+    DEFAULT_SEGMENTS,
+    MIN_SEGMENTS,
+    Hose,
+    bending_stiffness_from_modulus,
+    isotropic_torsional_stiffness,
+)
+from hoseline.model.mounts import Mount
+from hoseline.model.problem import Problem
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+
+class ProblemFileError(ValueError):
+    """A problem file (or dict) that cannot describe a hose placement; the message says what to fix."""
+
+
+# unit (or meaning) of each key, for messages and the comments of a written problem file
+_UNITS = {
+    "length": "mm",
+    "outer_diameter": "mm",
+    "bending_stiffness": "EI, N*mm^2",
+    "bending_stiffness_2": "EI about the second axis, N*mm^2",
+    "torsional_stiffness": "GJ, N*mm^2",
+    "mass_per_length": "kg/m",
+    "min_bend_radius": "mm, to the inside of the bend",
+    "segments": "rigid segments of the model",
+    "point": "mm",
+    "direction": "from the fitting into the hose",
+    "twist": "degrees, end fitting about its direction",
+    "gravity": "m/s^2",
+}
+
+
+# --- field checks: each raises ValueError with the reason only; the location and value are added later ---
+
+
+def _positive(unit: str):
+    def check(value: float) -> float:
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"must be positive ({unit})")
+        return value
+
+    return AfterValidator(check)
+
+
+def _not_negative(unit: str):
+    def check(value: float) -> float:
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ValueError(f"must be zero or positive ({unit})")
+        return value
+
+    return AfterValidator(check)
+
+
+def _finite(value: float) -> float:
+    if not math.isfinite(value):
+        raise ValueError("must be a finite number")
+    return value
+
+
+def _vector(value: list[float]) -> list[float]:
+    if len(value) != 3:
+        raise ValueError("must have exactly three components [x, y, z]")
+    if not all(math.isfinite(v) for v in value):
+        raise ValueError("components must be finite numbers")
+    return value
+
+
+def _direction(value: list[float]) -> list[float]:
+    _vector(value)
+    if math.hypot(*value) < 1e-12:
+        raise ValueError("a direction cannot be the zero vector; give the fitting axis, e.g. [1, 0, 0]")
+    return value
+
+
+def _poisson(value: float) -> float:
+    if not (math.isfinite(value) and -1.0 < value <= 0.5):
+        raise ValueError("must lie in (-1, 0.5]")
+    return value
+
+
+def _segments(value: int) -> int:
+    if value < MIN_SEGMENTS:
+        raise ValueError(f"must be at least {MIN_SEGMENTS}")
+    return value
+
+
+Vector = Annotated[list[float], AfterValidator(_vector)]
+Direction = Annotated[list[float], AfterValidator(_direction)]
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+
+class HoseSection(_Section):
+    """[hose]: geometry, stiffness, weight and limits (mm, N*mm^2, N/mm^2, kg/m)."""
+
+    length: Annotated[float, _positive("mm")]
+    outer_diameter: Annotated[float, _positive("mm")]
+    bending_stiffness: Annotated[float, _positive("N*mm^2")] | None = None
+    bending_stiffness_2: Annotated[float, _positive("N*mm^2")] | None = None
+    youngs_modulus: Annotated[float, _positive("N/mm^2")] | None = None
+    inner_diameter: Annotated[float, _not_negative("mm")] | None = None
+    torsional_stiffness: Annotated[float, _positive("N*mm^2")] | None = None
+    torsion_factor: Annotated[float, _positive("dimensionless")] | None = None
+    poisson_ratio: Annotated[float, AfterValidator(_poisson)] | None = None
+    mass_per_length: Annotated[float, _not_negative("kg/m")] = 0.0
+    min_bend_radius: Annotated[float, _not_negative("mm")] | None = None
+    segments: Annotated[int, AfterValidator(_segments)] = DEFAULT_SEGMENTS
+
+    @model_validator(mode="after")
+    def _one_way_to_give_each_stiffness(self) -> "HoseSection":
+        if self.bending_stiffness is not None and self.youngs_modulus is not None:
+            raise ValueError(
+                "hose: both bending_stiffness and youngs_modulus are given: keep one "
+                "(bending_stiffness = EI in N*mm^2, or youngs_modulus = E in N/mm^2 with the diameters)"
+            )
+        if self.bending_stiffness is None and self.youngs_modulus is None:
+            raise ValueError(
+                "hose: no bending stiffness: give bending_stiffness (EI, N*mm^2) "
+                "or youngs_modulus (E, N/mm^2, used with outer_diameter and inner_diameter)"
+            )
+        if self.youngs_modulus is None and self.inner_diameter is not None:
+            raise ValueError("hose.inner_diameter is only used with youngs_modulus: remove it, bending_stiffness is given")
+        if self.youngs_modulus is not None and self.bending_stiffness_2 is not None:
+            raise ValueError(
+                "hose.bending_stiffness_2 needs bending_stiffness: a section computed from youngs_modulus is round"
+            )
+        if self.inner_diameter is not None and self.inner_diameter >= self.outer_diameter:
+            raise ValueError(
+                f"hose.inner_diameter = {_show(self.inner_diameter)} mm is not smaller than "
+                f"outer_diameter = {_show(self.outer_diameter)} mm: give the bore, smaller than the outside"
+            )
+        if self.torsional_stiffness is not None and self.torsion_factor is not None:
+            raise ValueError(
+                "hose: both torsional_stiffness and torsion_factor are given: keep one "
+                "(torsional_stiffness = GJ in N*mm^2, or torsion_factor times the isotropic EI/(1+poisson_ratio))"
+            )
+        if self.torsional_stiffness is not None and self.poisson_ratio is not None:
+            raise ValueError(
+                "hose.poisson_ratio is only used with torsion_factor: remove it, torsional_stiffness is given"
+            )
+        return self
+
+    def stiffnesses(self) -> tuple[float, float]:
+        """(EI, GJ) in N*mm^2 from whichever keys were given."""
+        if self.bending_stiffness is not None:
+            bending = self.bending_stiffness
+        else:
+            bending = bending_stiffness_from_modulus(self.youngs_modulus, self.outer_diameter, self.inner_diameter or 0.0)
+        if self.torsional_stiffness is not None:
+            return bending, self.torsional_stiffness
+        factor = 1.0 if self.torsion_factor is None else self.torsion_factor
+        nu = DEFAULT_POISSON_RATIO if self.poisson_ratio is None else self.poisson_ratio
+        return bending, factor * isotropic_torsional_stiffness(bending, nu)
+
+
+class MountSection(_Section):
+    """[start] and [end]: the fitting tip (mm) and the direction from the fitting into the hose."""
+
+    point: Vector
+    direction: Direction
+
+
+class EndSection(MountSection):
+    """[end]: as [start], plus the twist of the end fitting at assembly (degrees)."""
+
+    twist: Annotated[float, AfterValidator(_finite)] = 0.0
+
+
+class EnvironmentSection(_Section):
+    """[environment]: gravity vector in m/s^2."""
+
+    gravity: Vector = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+class ProblemFile(_Section):
+    """The whole problem file."""
+
+    name: str = "hose"
+    hose: HoseSection
+    start: MountSection
+    end: EndSection
+    environment: EnvironmentSection = Field(default_factory=EnvironmentSection)
+
+    @model_validator(mode="after")
+    def _hose_reaches(self) -> "ProblemFile":
+        distance = math.dist(self.start.point, self.end.point)
+        if distance >= self.hose.length * (1.0 - 1e-9):
+            relation = "is shorter than" if self.hose.length < distance else "is not longer than"
+            raise ValueError(
+                f"hose.length = {_show(self.hose.length)} mm {relation} the mount distance {distance:g} mm: "
+                f"use a hose longer than {distance:g} mm"
+            )
+        return self
+
+
+# --- turning pydantic's errors into one line an engineer can act on ---
+
+
+def _show(value: Any) -> str:
+    """A value as the user wrote it in TOML."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_show(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(value) + "}"
+    if isinstance(value, str):
+        return json.dumps(value)
+    return str(value)
+
+
+def _path(loc: tuple) -> str:
+    """A pydantic location as the user writes it: ('start', 'point', 1) -> start.point[1]."""
+    text = ""
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+def _section_model(loc: tuple) -> type[BaseModel] | None:
+    """The model class for the table at `loc` (for listing its keys)."""
+    model: type[BaseModel] = ProblemFile
+    for part in loc:
+        field = model.model_fields.get(part) if isinstance(part, str) else None
+        annotation = field.annotation if field else None
+        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
+            return None
+        model = annotation
+    return model
+
+
+def _unknown_key(loc: tuple) -> str:
+    """Name the unknown key and suggest the nearest known one (or list them)."""
+    key = str(loc[-1])
+    model = _section_model(loc[:-1])
+    known = list(model.model_fields) if model else []
+    prefix = _path(loc[:-1]) + "." if loc[:-1] else ""
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
+    hint = f"did you mean '{prefix}{close[0]}'?" if close else "allowed keys: " + ", ".join(known)
+    return f"unknown key '{_path(loc)}': {hint}"
+
+
+_TYPE_REASONS = {
+    "float_type": "must be a number",
+    "int_type": "must be a whole number",
+    "list_type": "must be a list of three numbers, e.g. [0.0, 1.0, 0.0]",
+    "string_type": 'must be text in quotes, e.g. "front brake hose"',
+}
+
+
+def _message(error: dict) -> str:
+    """One pydantic error as 'field = value: reason'."""
+    loc, kind, value = tuple(error["loc"]), error["type"], error.get("input")
+    if kind == "extra_forbidden":
+        return _unknown_key(loc)
+    if kind == "missing":
+        if _section_model(loc):
+            return f"missing table [{_path(loc)}]"
+        unit = _UNITS.get(str(loc[-1]))
+        return f"missing key '{_path(loc)}'" + (f" ({unit})" if unit else "")
+    if kind == "model_type":
+        return f"{_path(loc)} = {_show(value)}: must be a table [{_path(loc)}] with its keys below it"
+    if kind == "value_error":
+        reason = str(error["ctx"]["error"])
+        if isinstance(value, dict):  # a rule across several keys: the message names them itself
+            return reason
+    else:
+        reason = _TYPE_REASONS.get(kind, error["msg"])
+    return f"{_path(loc)} = {_show(value)}: {reason}"
+
+
+def problem_from_dict(data: dict, source: str = "<dict>") -> Problem:
+    """Validate a parsed problem file and build the Problem.
+
+    data: the file's content as nested dicts (keys and units as in the module docstring).
+    source: where the data came from, put in front of error messages (a file name).
+    Raises ProblemFileError naming the field, the value and the fix.
+    """
+    if not isinstance(data, dict):
+        raise ProblemFileError(f"{source}: expected tables [hose], [start] and [end], got {type(data).__name__}")
+    try:
+        spec = ProblemFile.model_validate(data)
+    except pydantic.ValidationError as exc:
+        # an unknown key first: a misspelt key also shows up as a missing one
+        errors = sorted(exc.errors(), key=lambda error: error["type"] != "extra_forbidden")
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        raise ProblemFileError(f"{source}: {_message(errors[0])}{more}") from None
+    bending, torsional = spec.hose.stiffnesses()
+    try:
+        hose = Hose(
+            length=spec.hose.length,
+            outer_diameter=spec.hose.outer_diameter,
+            bending_stiffness=bending,
+            torsional_stiffness=torsional,
+            mass_per_length=spec.hose.mass_per_length,
+            min_bend_radius=spec.hose.min_bend_radius,
+            segments=spec.hose.segments,
+            bending_stiffness_2=spec.hose.bending_stiffness_2,
+        )
+        return Problem(
+            hose=hose,
+            start=Mount(point=spec.start.point, direction=spec.start.direction),
+            end=Mount(point=spec.end.point, direction=spec.end.direction),
+            end_twist_deg=spec.end.twist,
+            gravity=spec.environment.gravity,
+            name=spec.name,
+        )
+    except ValueError as exc:  # the model's own checks; its messages name the field
+        raise ProblemFileError(f"{source}: {exc}") from None
+
+
+def load_problem(path: str | Path) -> Problem:
+    """Read a TOML problem file.
+
+    path: the file; its stem is the problem name unless the file gives `name`.
+    Raises ProblemFileError for invalid content (with the TOML line for syntax errors)
+    and OSError (e.g. FileNotFoundError) when the file cannot be read.
+    """
+    path = Path(path)
+    with path.open("rb") as stream:
+        try:
+            data = tomllib.load(stream)
+        except tomllib.TOMLDecodeError as exc:
+            raise ProblemFileError(f"{path}: not valid TOML: {exc}") from None
+        except UnicodeDecodeError:
+            raise ProblemFileError(f"{path}: not UTF-8 text: save the problem file as UTF-8") from None
+    data.setdefault("name", path.stem)
+    return problem_from_dict(data, source=str(path))
+
+
+def problem_to_dict(problem: Problem) -> dict:
+    """The problem in the file format, with EI and GJ explicit (for result.json and problem.toml).
+
+    problem_from_dict(problem_to_dict(p)) rebuilds p.
+    """
+    hose = problem.hose
+    hose_dict: dict[str, Any] = {
+        "length": float(hose.length),
+        "outer_diameter": float(hose.outer_diameter),
+        "bending_stiffness": float(hose.bending_stiffness),
+        "torsional_stiffness": float(hose.torsional_stiffness),
+        "mass_per_length": float(hose.mass_per_length),
+        "segments": int(hose.segments),
+    }
+    if hose.bending_stiffness_2 is not None:
+        hose_dict["bending_stiffness_2"] = float(hose.bending_stiffness_2)
+    if hose.min_bend_radius is not None:
+        hose_dict["min_bend_radius"] = float(hose.min_bend_radius)
+    return {
+        "name": problem.name,
+        "hose": hose_dict,
+        "start": {"point": _floats(problem.start.point), "direction": _floats(problem.start.direction)},
+        "end": {
+            "point": _floats(problem.end.point),
+            "direction": _floats(problem.end.direction),
+            "twist": float(problem.end_twist_deg),
+        },
+        "environment": {"gravity": _floats(problem.gravity)},
+    }
+
+
+def _floats(vector: np.ndarray) -> list[float]:
+    return [float(v) for v in vector]
+
+
+def problem_to_toml(problem: Problem) -> str:
+    """The problem as a commented TOML problem file that load_problem reads back."""
+    lines = []
+    for key, value in problem_to_dict(problem).items():
+        if isinstance(value, dict):
+            lines.append(f"\n[{key}]")
+            for name, item in value.items():
+                text = f"{name} = {_toml_value(item)}"
+                lines.append(f"{text:<45} # {_UNITS[name]}")
+        else:
+            lines.append(f"{key} = {_toml_value(value)}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, str):
+        return json.dumps(value)  # a JSON string is a valid TOML basic string
+    return repr(value)  # int, or float in the shortest form that reads back exactly

@@ -1,0 +1,297 @@
+"""Potential energy of the discrete Kirchhoff rod, with its exact gradient and Hessian.
+
+The rod (see docs/model.md) is N rigid segments of length h = L/N, each with a
+material frame (rows d1, d2, d3; d3 the tangent).  Centreline nodes follow from the
+frames, x_{i+1} = x_i + h d3_i, so the hose is exactly inextensible and unshearable.
+Neighbouring frames are joined by elastic joints at the nodes; the first and last
+joints tie segment 0 to the start fitting's frame and segment N-1 to the end fitting's
+frame over half a segment (h/2), which keeps the clamps second-order accurate.
+
+Joint energy.  For frames A and B let Q = A B^T (Q_kl = d_k^A . d_l^B) be the relative
+rotation by angle phi about the axis e (same components in both frames).  The
+discrete Darboux vector is  kappa = 2 tan(phi/2) e / l = 2 a / (c l)  with
+a = axial(Q - Q^T) = 2 sin(phi) e,  c = 1 + tr Q = 4 cos^2(phi/2),  and
+    E_joint = (l / 2) sum_k K_k kappa_k^2 = (2 / l) sum_k K_k a_k^2 / c^2,
+K = (EI1, EI2, GJ).  2 tan(phi/2) = phi + O(phi^3), so E = K phi^2 / (2 l) to second
+order, and the energy grows without bound as a joint approaches a full reversal, so
+there is no spurious zero-energy state at large twist.
+
+Segment terms.  Gravity and the end-position constraint (Lagrange multiplier mu, the
+force of the end mount on the hose) are both linear in the tangents:
+    E_segment_i = - w_i . d3_i,   w_i = h (mu + weight of the hose beyond segment i's centre),
+so w_i / h is the internal force at the segment's centre.
+
+Derivatives.  Every frame is perturbed by a small world rotation delta_i:
+d -> exp(delta^) d = d + delta x d + 1/2 delta x (delta x d) + ...  The gradient and
+Hessian below are those of E(delta) at delta = 0 (exact, no approximation), which is
+what Newton's method on the rotation group needs.  Derivation in docs/model.md;
+verified against finite differences in tests/test_energy_derivatives.py.
+
+Written by hand (Numba) because no library offers this rod; everything is a plain
+loop over joints so the cost is linear in N.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+BANDWIDTH = 5  # half bandwidth of the Hessian: 3x3 blocks, neighbours only
+
+
+@njit(cache=True)
+def _cross_into(out, row, a, b, sign):
+    # out[row] += sign * (a x b)
+    out[row, 0] += sign * (a[1] * b[2] - a[2] * b[1])
+    out[row, 1] += sign * (a[2] * b[0] - a[0] * b[2])
+    out[row, 2] += sign * (a[0] * b[1] - a[1] * b[0])
+
+
+@njit(cache=True)
+def joint_terms(frame_a, frame_b, stiffness, joint_length):
+    """Energy, gradient and Hessian blocks of one elastic joint.
+
+    frame_a, frame_b: 3x3 frames (rows = directors).  stiffness: (EI1, EI2, GJ) N*mm^2.
+    joint_length: mm.
+    Returns (energy, grad_a, grad_b, hess_aa, hess_bb, hess_ab) where the second-order
+    term is 1/2 da.Haa.da + 1/2 db.Hbb.db + da.Hab.db (hess_ab is not symmetric);
+    grad_b = -grad_a and hess_bb = hess_aa because the energy depends on the relative rotation only.
+    """
+    scratch = new_scratch()
+    grad_a = np.empty(3)
+    hess_aa = np.empty((3, 3))
+    hess_ab = np.empty((3, 3))
+    energy = joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, scratch)
+    return energy, grad_a, -grad_a, hess_aa, hess_aa.copy(), hess_ab
+
+
+@njit(cache=True)
+def new_scratch():
+    """Work arrays for joint_terms_into, allocated once per assembly (allocation dominates otherwise)."""
+    return np.empty((3, 3)), np.empty(4), np.empty((4, 4)), np.empty((3, 3)), np.empty((4, 3)), np.empty((4, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+
+
+@njit(cache=True)
+def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, scratch):
+    """joint_terms writing grad_a, hess_aa, hess_ab into given arrays; returns the energy.
+
+    Written with explicit loops: 3x3 products through BLAS and small temporary arrays
+    cost more than the arithmetic.
+    """
+    q, e_u, e_uu, w, b, eb, first, wb, t = scratch
+    for k in range(3):
+        for l in range(3):
+            q[k, l] = frame_a[k, 0] * frame_b[l, 0] + frame_a[k, 1] * frame_b[l, 1] + frame_a[k, 2] * frame_b[l, 2]
+    a0 = q[2, 1] - q[1, 2]
+    a1 = q[0, 2] - q[2, 0]
+    a2 = q[1, 0] - q[0, 1]
+    c = 1.0 + q[0, 0] + q[1, 1] + q[2, 2]
+    scale = 2.0 / joint_length
+    k0, k1, k2 = stiffness[0], stiffness[1], stiffness[2]
+    ka2 = k0 * a0 * a0 + k1 * a1 * a1 + k2 * a2 * a2
+    c2 = c * c
+    energy = scale * ka2 / c2
+
+    # first and second derivatives with respect to u = (a1, a2, a3, c)
+    e_u[0] = 2.0 * scale * k0 * a0 / c2
+    e_u[1] = 2.0 * scale * k1 * a1 / c2
+    e_u[2] = 2.0 * scale * k2 * a2 / c2
+    e_u[3] = -2.0 * scale * ka2 / (c2 * c)
+    e_uu[:, :] = 0.0
+    e_uu[0, 0] = 2.0 * scale * k0 / c2
+    e_uu[1, 1] = 2.0 * scale * k1 / c2
+    e_uu[2, 2] = 2.0 * scale * k2 / c2
+    e_uu[0, 3] = e_uu[3, 0] = -4.0 * scale * k0 * a0 / (c2 * c)
+    e_uu[1, 3] = e_uu[3, 1] = -4.0 * scale * k1 * a1 / (c2 * c)
+    e_uu[2, 3] = e_uu[3, 2] = -4.0 * scale * k2 * a2 / (c2 * c)
+    e_uu[3, 3] = 6.0 * scale * ka2 / (c2 * c2)
+
+    # dE/dQ_kl (weight of each entry of Q)
+    w[:, :] = 0.0
+    w[2, 1] += e_u[0]
+    w[1, 2] -= e_u[0]
+    w[0, 2] += e_u[1]
+    w[2, 0] -= e_u[1]
+    w[1, 0] += e_u[2]
+    w[0, 1] -= e_u[2]
+    for k in range(3):
+        w[k, k] += e_u[3]
+
+    # b_u = du/d(delta_a); du/d(delta_b) = -b_u, because dQ_kl/d(delta_a) = d_k^A x d_l^B = -dQ_kl/d(delta_b)
+    b[:, :] = 0.0
+    _cross_into(b, 0, frame_a[2], frame_b[1], 1.0)
+    _cross_into(b, 0, frame_a[1], frame_b[2], -1.0)
+    _cross_into(b, 1, frame_a[0], frame_b[2], 1.0)
+    _cross_into(b, 1, frame_a[2], frame_b[0], -1.0)
+    _cross_into(b, 2, frame_a[1], frame_b[0], 1.0)
+    _cross_into(b, 2, frame_a[0], frame_b[1], -1.0)
+    for k in range(3):
+        _cross_into(b, 3, frame_a[k], frame_b[k], 1.0)
+
+    grad_a[:] = 0.0
+    for u in range(4):
+        for x in range(3):
+            grad_a[x] += e_u[u] * b[u, x]
+
+    # first = b^T e_uu b ; t = A^T w B = sum_kl w_kl d_k^A (d_l^B)^T ; s = <w, Q>
+    eb[:, :] = 0.0
+    for u in range(4):
+        for v in range(4):
+            if e_uu[u, v] != 0.0:
+                for x in range(3):
+                    eb[u, x] += e_uu[u, v] * b[v, x]
+    for x in range(3):
+        for y in range(3):
+            acc = 0.0
+            for u in range(4):
+                acc += b[u, x] * eb[u, y]
+            first[x, y] = acc
+    wb[:, :] = 0.0  # w @ B
+    s = 0.0
+    for k in range(3):
+        for l in range(3):
+            s += w[k, l] * q[k, l]
+            if w[k, l] != 0.0:
+                for y in range(3):
+                    wb[k, y] += w[k, l] * frame_b[l, y]
+    for x in range(3):
+        for y in range(3):
+            t[x, y] = frame_a[0, x] * wb[0, y] + frame_a[1, x] * wb[1, y] + frame_a[2, x] * wb[2, y]
+    for x in range(3):
+        for y in range(3):
+            hess_aa[x, y] = first[x, y] + 0.5 * (t[x, y] + t[y, x])
+            hess_ab[x, y] = -first[x, y] - t[y, x]
+        hess_aa[x, x] -= s
+        hess_ab[x, x] += s
+    return energy
+
+
+@njit(cache=True)
+def joint_energy(frame_a, frame_b, stiffness, joint_length):
+    """Energy of one joint only (N*mm); see joint_terms."""
+    q = frame_a @ frame_b.T
+    a0 = q[2, 1] - q[1, 2]
+    a1 = q[0, 2] - q[2, 0]
+    a2 = q[1, 0] - q[0, 1]
+    c = 1.0 + q[0, 0] + q[1, 1] + q[2, 2]
+    return 2.0 / joint_length * (stiffness[0] * a0**2 + stiffness[1] * a1**2 + stiffness[2] * a2**2) / c**2
+
+
+@njit(cache=True)
+def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True):
+    """Total elastic energy (N*mm) of the rod; the last joint only when the end is clamped."""
+    n = frames.shape[0]
+    total = joint_energy(start_frame, frames[0], stiffness, 0.5 * h)
+    for i in range(n - 1):
+        total += joint_energy(frames[i], frames[i + 1], stiffness, h)
+    if end_clamped:
+        total += joint_energy(frames[n - 1], end_frame, stiffness, 0.5 * h)
+    return total
+
+
+@njit(cache=True)
+def _add_diag_block(band, row0, block):
+    # lower triangle of a symmetric diagonal block into band storage band[i, k] = H[i, i-k]
+    for r in range(3):
+        for c in range(r + 1):
+            band[row0 + r, r - c] += block[r, c]
+
+
+@njit(cache=True)
+def _add_lower_block_transposed(band, row0, col0, block):
+    # H[row0:row0+3, col0:col0+3] += block^T, with row0 > col0 (strictly below the diagonal blocks)
+    for r in range(3):
+        for c in range(3):
+            band[row0 + r, row0 + r - col0 - c] += block[c, r]
+
+
+@njit(cache=True)
+def assemble(frames, start_frame, end_frame, stiffness, h, segment_loads, roll_free, grad, band, end_clamped=True):
+    """Elastic + segment energy of the rod, its gradient and its banded Hessian.
+
+    frames: (N,3,3).  start_frame, end_frame: (3,3) fitting frames.  stiffness: (3,) N*mm^2.
+    h: segment length, mm.  segment_loads: (N,3) vectors w_i in N*mm (see module doc).
+    roll_free: when True one extra unknown, the roll of the end frame about its tangent, is
+    appended after the 3N segment rotations.  end_clamped: False for a free tip (no end joint).
+    grad: (n,) output, band: (n, BANDWIDTH+1) output (lower band, band[i, k] = H[i, i-k]);
+    both are overwritten.  Returns (elastic_energy, segment_energy) in N*mm.
+    """
+    n_seg = frames.shape[0]
+    grad[:] = 0.0
+    band[:, :] = 0.0
+    scratch = new_scratch()
+    g = np.empty(3)
+    haa = np.empty((3, 3))
+    hab = np.empty((3, 3))
+    energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab, scratch)
+    grad[0:3] -= g
+    _add_diag_block(band, 0, haa)
+    for i in range(n_seg - 1):
+        energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab, scratch)
+        for x in range(3):
+            grad[3 * i + x] += g[x]
+            grad[3 * i + 3 + x] -= g[x]
+        _add_diag_block(band, 3 * i, haa)
+        _add_diag_block(band, 3 * i + 3, haa)
+        _add_lower_block_transposed(band, 3 * i + 3, 3 * i, hab)
+    last = 3 * (n_seg - 1)
+    if end_clamped:
+        energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab, scratch)
+        for x in range(3):
+            grad[last + x] += g[x]
+        _add_diag_block(band, last, haa)
+    if roll_free and end_clamped:
+        axis = end_frame[2]
+        roll = 3 * n_seg
+        grad[roll] = -(g[0] * axis[0] + g[1] * axis[1] + g[2] * axis[2])
+        for x in range(3):
+            for y in range(3):
+                band[roll, 0] += axis[x] * haa[x, y] * axis[y]
+        for c in range(3):  # H[segment N-1 rows, roll] = hab @ axis
+            band[roll, roll - last - c] += hab[c, 0] * axis[0] + hab[c, 1] * axis[1] + hab[c, 2] * axis[2]
+
+    segment_energy = 0.0
+    for i in range(n_seg):
+        d3 = frames[i, 2]
+        w = segment_loads[i]
+        segment_energy -= w[0] * d3[0] + w[1] * d3[1] + w[2] * d3[2]
+        grad[3 * i] += w[1] * d3[2] - w[2] * d3[1]
+        grad[3 * i + 1] += w[2] * d3[0] - w[0] * d3[2]
+        grad[3 * i + 2] += w[0] * d3[1] - w[1] * d3[0]
+        wd = w[0] * d3[0] + w[1] * d3[1] + w[2] * d3[2]
+        for r in range(3):
+            for c in range(r + 1):
+                band[3 * i + r, r - c] += (wd if r == c else 0.0) - 0.5 * (w[r] * d3[c] + d3[r] * w[c])
+    return energy, segment_energy
+
+
+@njit(cache=True)
+def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True):
+    """Internal moment (world, N*mm) and discrete Darboux vector (material, 1/mm) at the N+1 nodes.
+
+    The moment at node j is dE_joint/d(delta_B): the moment exerted by the part of the
+    hose beyond the node on the part before it.  The Darboux vector components are
+    (bending about d1, bending about d2, twist rate).  A free tip carries no moment.
+    """
+    n_seg = frames.shape[0]
+    scratch = new_scratch()
+    g = np.empty(3)
+    haa = np.empty((3, 3))
+    hab = np.empty((3, 3))
+    moments = np.zeros((n_seg + 1, 3))
+    darboux = np.zeros((n_seg + 1, 3))
+    for j in range(n_seg + 1 if end_clamped else n_seg):
+        if j == 0:
+            fa, fb, length = start_frame, frames[0], 0.5 * h
+        elif j == n_seg:
+            fa, fb, length = frames[n_seg - 1], end_frame, 0.5 * h
+        else:
+            fa, fb, length = frames[j - 1], frames[j], h
+        joint_terms_into(fa, fb, stiffness, length, g, haa, hab, scratch)
+        moments[j] = -g
+        q = fa @ fb.T
+        c = 1.0 + q[0, 0] + q[1, 1] + q[2, 2]
+        darboux[j, 0] = 2.0 * (q[2, 1] - q[1, 2]) / (c * length)
+        darboux[j, 1] = 2.0 * (q[0, 2] - q[2, 0]) / (c * length)
+        darboux[j, 2] = 2.0 * (q[1, 0] - q[0, 1]) / (c * length)
+    return moments, darboux

@@ -1,0 +1,262 @@
+"""Newton's method for the rod's equilibrium: stationary energy under the end-position constraint.
+
+Unknowns: a small world rotation of every segment frame (plus the end roll when it is
+free) and the end-mount force mu (Lagrange multiplier of x_N = end point).  Each
+iteration solves the bordered banded system of banded.py, so the cost is linear in N.
+
+Two modes:
+- tracking (the default for continuation): plain Newton steps, halved while they do not
+  reduce the residual;
+- minimising: when the Hessian on the constraint tangent space has negative directions,
+  a multiple of the identity is added until it has none (inertia correction), and steps
+  must lower the augmented Lagrangian; this walks downhill to a stable equilibrium instead
+  of converging to a saddle (used to leave an unstable branch).
+
+Convergence is on the force and moment balance: the largest moment residual divided by a
+moment scale, and the end-position error divided by the length, both below `tolerance`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from hoseline.mechanics.banded import banded_matvec, count_negative, kkt_solve, ldlt_banded, ldlt_solve
+from hoseline.mechanics.energy import BANDWIDTH, assemble
+from hoseline.mechanics.rod import Clamps, RodState, centerline, constraint_jacobian_t, gravity_energy, segment_loads
+from hoseline.mechanics.rotations import rotate_frames, rotation_matrix
+
+
+@dataclass(frozen=True)
+class RodProperties:
+    """Internal-unit properties of the discrete rod: stiffness (EI1, EI2, GJ) N*mm^2, segment length h mm, count N."""
+
+    stiffness: np.ndarray
+    segment_length: float
+    segments: int
+
+    @property
+    def length(self) -> float:
+        return self.segment_length * self.segments
+
+
+@dataclass
+class NewtonReport:
+    """Outcome of one equilibrium solve."""
+
+    converged: bool
+    iterations: int
+    residual: float
+    unstable_directions: int
+    message: str = ""
+
+
+@dataclass
+class System:
+    """Energy, derivatives and constraint of the rod at one state (internal units)."""
+
+    energy: float  # elastic + gravity, N*mm
+    grad: np.ndarray  # gradient of the Lagrangian, N*mm per rad
+    band: np.ndarray  # banded Hessian of the Lagrangian
+    jac_t: np.ndarray  # (n, 3)
+    constraint: np.ndarray  # x_N - end point, mm (zero for a free tip)
+    residual: float
+    constrained: bool  # False for a free tip
+
+
+def end_frame_of(clamps: Clamps, state: RodState) -> np.ndarray:
+    """The end fitting frame including the free roll accumulated in the state (identity for a free tip)."""
+    if not clamps.end_clamped:
+        return np.eye(3)
+    if not clamps.roll_free or state.roll == 0.0:
+        return clamps.end_frame
+    return clamps.end_frame @ rotation_matrix(state.roll * clamps.end_frame[2]).T
+
+
+@njit(cache=True)
+def _tip(frames, start_point, h):
+    tip = start_point.copy()
+    for i in range(frames.shape[0]):
+        tip += h * frames[i, 2]
+    return tip
+
+
+def moment_scale(props: RodProperties, state: RodState, clamps: Clamps) -> float:
+    """Moment (N*mm) against which residuals are measured: max stiffness / L plus force * L."""
+    length = props.length
+    force = float(np.linalg.norm(state.end_force)) + float(np.linalg.norm(clamps.line_weight)) * length
+    return float(np.max(props.stiffness)) / length + force * length
+
+
+def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
+    """Assemble the Lagrangian's gradient and Hessian, the constraint and the residual at a state."""
+    n_seg = props.segments
+    roll_free = clamps.roll_free and clamps.end_clamped
+    n = 3 * n_seg + (1 if roll_free else 0)
+    grad = np.empty(n)
+    band = np.empty((n, BANDWIDTH + 1))
+    h = props.segment_length
+    force = state.end_force if clamps.end_clamped else clamps.end_load
+    loads = segment_loads(state.frames, force, clamps.line_weight, h)
+    end_frame = end_frame_of(clamps, state)
+    e_el, _ = assemble(
+        state.frames, clamps.start_frame, end_frame, props.stiffness, h, loads, roll_free, grad, band, clamps.end_clamped
+    )
+    jac_t = np.zeros((n, 3))
+    tip = _tip(state.frames, clamps.start_point, h)
+    e_g = gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h)
+    if clamps.end_clamped:
+        jac_t[: 3 * n_seg] = constraint_jacobian_t(state.frames, h)
+        constraint = tip - clamps.end_point
+    else:
+        constraint = np.zeros(3)
+        e_g -= float(clamps.end_load @ (tip - clamps.start_point))  # potential of the dead tip load
+    residual = max(
+        float(np.max(np.abs(grad))) / moment_scale(props, state, clamps),
+        float(np.max(np.abs(constraint))) / props.length,
+    )
+    return System(e_el + e_g, grad, band, jac_t, constraint, residual, clamps.end_clamped)
+
+
+def newton_step(system: System, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int, bool]:
+    """Newton step of (H + shift I) with the end constraint (when the end is clamped).
+
+    Returns (step, force_step, unstable_directions, tiny_pivot): the step in rotations (rad),
+    the change of the end force (N), the number of negative eigenvalues of H + shift I on the
+    constraint tangent space, and whether the factorisation met a negligible pivot.
+    """
+    lower, diag, tiny = ldlt_banded(system.band, shift)
+    if system.constrained:
+        step, force_step, unstable = kkt_solve(lower, diag, system.jac_t, system.grad, system.constraint)
+        return step, force_step, int(unstable), tiny
+    step = -ldlt_solve(lower, diag, system.grad)
+    return step, np.zeros(3), int(count_negative(diag)), tiny
+
+
+def total_energy(props: RodProperties, clamps: Clamps, state: RodState) -> float:
+    """Elastic plus gravity energy, N*mm."""
+    return evaluate(props, clamps, state).energy
+
+
+def apply_step(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, force_step: np.ndarray) -> RodState:
+    """A new state: every frame rotated by its part of `step` (rad), roll advanced, force updated (N)."""
+    n_seg = props.segments
+    frames = rotate_frames(state.frames, step[: 3 * n_seg].reshape(n_seg, 3))
+    roll = state.roll + (float(step[3 * n_seg]) if step.size > 3 * n_seg else 0.0)
+    return RodState(frames, state.end_force + force_step, roll)
+
+
+def inertia(system: System) -> int:
+    """Number of negative eigenvalues of the Hessian on the constraint tangent space."""
+    return newton_step(system)[2]
+
+
+def solve_equilibrium(
+    props: RodProperties,
+    clamps: Clamps,
+    state: RodState,
+    *,
+    tolerance: float = 1e-11,
+    max_iterations: int = 25,
+    minimise: bool = False,
+) -> tuple[RodState, NewtonReport]:
+    """Newton iterations from `state` to an equilibrium under `clamps`.
+
+    Returns the final state and a report; the state is only meaningful when report.converged.
+    tolerance: relative residual of force and moment balance.  minimise: see module doc.
+    """
+    if minimise:
+        return _minimise(props, clamps, state, tolerance, max_iterations)
+    system = evaluate(props, clamps, state)
+    for iteration in range(max_iterations + 1):
+        if not np.isfinite(system.residual):
+            return state, NewtonReport(False, iteration, math.inf, -1, "non-finite residual")
+        step, force_step, unstable, tiny = newton_step(system)
+        if system.residual <= tolerance:
+            return state, NewtonReport(True, iteration, system.residual, -1 if tiny else int(unstable))
+        if iteration == max_iterations:
+            break
+        alpha = 1.0
+        for _ in range(8):
+            trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
+            trial_system = evaluate(props, clamps, trial)
+            if trial_system.residual < (1.0 - 1e-4 * alpha) * system.residual or trial_system.residual <= tolerance:
+                break
+            alpha *= 0.5
+        else:
+            return state, NewtonReport(False, iteration + 1, system.residual, int(unstable), "line search failed")
+        state, system = trial, trial_system
+    return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
+
+
+def _lagrangian(system: System, force: np.ndarray) -> float:
+    return system.energy - float(force @ system.constraint)
+
+
+def _minimise(props, clamps, state, tolerance, max_iterations):
+    """Levenberg-Marquardt / trust-region Newton that only accepts steps lowering the energy.
+
+    The Hessian is shifted by sigma*I, sigma at least large enough for a positive definite
+    Hessian on the tangent space; sigma shrinks after good steps (ratio of actual to predicted
+    decrease > 0.75) and grows after poor ones, so the method ends as plain Newton at a
+    stable minimum.
+    """
+    system = evaluate(props, clamps, state)
+    diag_scale = float(np.max(np.abs(system.band[:, 0])))
+    sigma_floor = 1e-10 * diag_scale
+    sigma = 0.0
+    penalty = 0.0
+    for iteration in range(max_iterations + 1):
+        if not np.isfinite(system.residual):
+            return state, NewtonReport(False, iteration, math.inf, -1, "non-finite residual")
+        step, force_step, unstable, tiny = newton_step(system)
+        if system.residual <= tolerance:
+            return state, NewtonReport(True, iteration, system.residual, -1 if tiny else int(unstable))
+        if iteration == max_iterations:
+            break
+        if unstable == 0 and not tiny and sigma == 0.0 and system.residual < 1e-6:
+            # close to a stable minimum: plain Newton, judged by the residual
+            trial = apply_step(props, clamps, state, step, force_step)
+            trial_system = evaluate(props, clamps, trial)
+            if trial_system.residual < system.residual:
+                state, system = trial, trial_system
+                continue
+            sigma = sigma_floor
+        base_constraint = float(system.constraint @ system.constraint)
+        for _ in range(40):
+            if sigma > 0.0 or unstable != 0 or tiny:
+                sigma = max(sigma, sigma_floor)
+                step, force_step, unstable_s, tiny_s = newton_step(system, sigma)
+                if unstable_s != 0 or tiny_s:
+                    sigma *= 4.0
+                    continue
+            # merit: Lagrangian plus a penalty on the end-position error that makes the
+            # predicted change negative (the step removes the linearised error)
+            model = float(system.grad @ step + 0.5 * step @ banded_matvec(system.band, step))
+            if base_constraint > 0.0:
+                penalty = max(penalty, 2.0 * max(model, 0.0) / base_constraint + 1e-8 * diag_scale)
+            predicted = model - 0.5 * penalty * base_constraint
+            base = _lagrangian(system, state.end_force) + 0.5 * penalty * base_constraint
+            trial = apply_step(props, clamps, state, step, force_step)
+            trial_system = evaluate(props, clamps, trial)
+            trial_constraint = float(trial_system.constraint @ trial_system.constraint)
+            actual = _lagrangian(trial_system, state.end_force) + 0.5 * penalty * trial_constraint - base
+            rounding = 1e-13 * (abs(base) + diag_scale)
+            ratio = actual / predicted if predicted < -rounding else (1.0 if actual <= rounding else -1.0)
+            if ratio > 0.1 or trial_system.residual <= tolerance:
+                if ratio > 0.75:
+                    sigma = 0.0 if sigma <= sigma_floor * 4.0 else sigma / 4.0
+                break
+            sigma = max(4.0 * sigma, 1e-4 * diag_scale)
+        else:
+            return state, NewtonReport(False, iteration + 1, system.residual, int(unstable), "no descent step found")
+        state, system = trial, trial_system
+    return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
+
+
+def node_positions(props: RodProperties, clamps: Clamps, state: RodState) -> np.ndarray:
+    """Centreline nodes (N+1, 3), mm."""
+    return centerline(state.frames, clamps.start_point, props.segment_length)

@@ -1,0 +1,214 @@
+"""Natural-parameter continuation of the rod's equilibrium along a path of clamps.
+
+A path maps a fraction t in [0, 1] to the clamps at that fraction.  Each step starts
+from the previous equilibrium; a step that does not converge is halved.  After every
+converged step the stability of the equilibrium is checked (inertia of the Hessian on
+the constraint tangent space).  When it is lost, the crossing is bracketed, the state is
+pushed along the critical eigenvector(s) to both sides and relaxed downhill, and the
+lowest stable result is followed on: the branch a real, slowly moved hose takes.
+Every such event is logged.  A path that cannot be followed raises PlacementError
+naming the phase, the fraction and the residual; nothing unconverged is returned.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from hoseline.mechanics.newton import (
+    NewtonReport,
+    RodProperties,
+    apply_step,
+    evaluate,
+    node_positions,
+    solve_equilibrium,
+    total_energy,
+)
+from hoseline.mechanics.rod import Clamps, RodState
+from hoseline.mechanics.rotations import extrapolate_frames
+from hoseline.mechanics.stability import smallest_eigenpairs
+
+Path = Callable[[float], Clamps]
+Progress = Callable[[str, float], None]
+
+
+class PlacementError(RuntimeError):
+    """The placement could not be completed; the message says in which phase, where and why."""
+
+
+@dataclass
+class ContinuationLog:
+    """Counters and events accumulated over all phases."""
+
+    iterations: int = 0
+    steps: int = 0
+    events: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class StepControl:
+    """Continuation step sizes (fractions of the path) and the Newton tolerance."""
+
+    first: float = 0.1
+    largest: float = 0.25
+    smallest: float = 1e-4
+    tolerance: float = 1e-11
+    fast_iterations: int = 4  # a step that converges within this many iterations lets the next one grow
+
+
+def relax_to_stable(
+    props: RodProperties, clamps: Clamps, candidates: list[RodState], log: ContinuationLog
+) -> tuple[RodState, list[RodState]] | None:
+    """Relax each candidate downhill to an equilibrium; return the stable one of lowest energy
+    and all distinct stable ones found (for reporting non-uniqueness), or None if none is stable."""
+    stable: list[tuple[float, RodState]] = []
+    for candidate in candidates:
+        # plain Newton first (cheap); if it ends anywhere but at a stable state, walk downhill
+        state, report = solve_equilibrium(props, clamps, candidate, max_iterations=12)
+        log.iterations += report.iterations
+        if not (report.converged and report.unstable_directions == 0):
+            state, report = solve_equilibrium(props, clamps, candidate, minimise=True, max_iterations=80)
+            log.iterations += report.iterations
+        if report.converged and report.unstable_directions == 0:
+            stable.append((total_energy(props, clamps, state), state))
+    if not stable:
+        return None
+    stable.sort(key=lambda pair: pair[0])
+    distinct: list[RodState] = []
+    for _, state in stable:
+        nodes = node_positions(props, clamps, state)
+        if all(np.max(np.abs(nodes - node_positions(props, clamps, other))) > 1e-6 * props.length for other in distinct):
+            distinct.append(state)
+    return stable[0][1], distinct
+
+
+def push_along_modes(props: RodProperties, clamps: Clamps, state: RodState, count: int) -> list[RodState]:
+    """States displaced to both sides along the `count` lowest eigenvectors (0.02 rad at most)."""
+    system = evaluate(props, clamps, state)
+    _, vectors = smallest_eigenpairs(system.band, system.jac_t, count=count)
+    n_rot = 3 * props.segments
+    pushed = []
+    for j in range(vectors.shape[1]):
+        mode = vectors[:, j]
+        amplitude = 0.02 / max(np.max(np.abs(mode[:n_rot])), 1e-12)
+        for sign in (1.0, -1.0):
+            step = sign * amplitude * mode
+            pushed.append(apply_step(props, clamps, state, step, np.zeros(3)))
+    return pushed
+
+
+def follow(
+    phase: str,
+    path: Path,
+    props: RodProperties,
+    state: RodState,
+    log: ContinuationLog,
+    *,
+    start: float = 0.0,
+    control: StepControl = StepControl(),
+    progress: Progress | None = None,
+) -> RodState:
+    """Follow the equilibrium from fraction `start` (where `state` is in equilibrium) to 1."""
+    t = start
+    dt = min(control.first, 1.0 - t)
+    last_failure: NewtonReport | None = None
+    previous: tuple[float, RodState] | None = None  # for the secant predictor
+    while t < 1.0 - 1e-14:
+        t_next = min(1.0, t + dt)
+        clamps = path(t_next)
+        guess = state if previous is None else _secant(previous, (t, state), t_next)
+        trial, report = solve_equilibrium(props, clamps, guess, tolerance=control.tolerance)
+        if not report.converged and guess is not state:
+            log.iterations += report.iterations
+            trial, report = solve_equilibrium(props, clamps, state, tolerance=control.tolerance)
+        log.iterations += report.iterations
+        if not report.converged:
+            last_failure = report
+            dt *= 0.5
+            if dt < control.smallest:
+                state = _snap_or_fail(phase, path, props, state, t, t + 2 * dt, log, last_failure)
+                t = t + 2 * dt
+                dt = control.first
+                previous = None
+            continue
+        log.steps += 1
+        previous = (t, state)
+        if report.unstable_directions != 0:
+            trial, t_next = _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, log, control)
+            previous = None  # a branch switch breaks the secant
+        state, t = trial, t_next
+        if progress is not None:
+            progress(phase, t)
+        if report.iterations <= control.fast_iterations:
+            dt = min(control.largest, dt * 2.0)
+    return state
+
+
+def _secant(previous: tuple[float, RodState], current: tuple[float, RodState], t_next: float) -> RodState:
+    """Linear extrapolation of the equilibrium path to t_next (frames on the rotation group)."""
+    (t0, s0), (t1, s1) = previous, current
+    ratio = (t_next - t1) / (t1 - t0)
+    frames = extrapolate_frames(s0.frames, s1.frames, ratio)
+    return RodState(frames, s1.end_force + ratio * (s1.end_force - s0.end_force), s1.roll + ratio * (s1.roll - s0.roll))
+
+
+def _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, log, control):
+    """The step from t to t_next ended on an unstable equilibrium: bracket the loss of
+    stability, then move to the lowest stable equilibrium next to it."""
+    stable_t, stable_state = t, state
+    unstable_t, unstable_state = t_next, trial
+    for _ in range(4):  # bracket the crossing (for the report) to 1/16 of the step
+        middle = 0.5 * (stable_t + unstable_t)
+        mid_state, mid_report = solve_equilibrium(props, path(middle), stable_state, tolerance=control.tolerance)
+        log.iterations += mid_report.iterations
+        if not mid_report.converged:
+            break
+        if mid_report.unstable_directions == 0:
+            stable_t, stable_state = middle, mid_state
+        else:
+            unstable_t, unstable_state = middle, mid_state
+    # relax at the end of the step, not at the bracketed crossing: right at the crossing the new
+    # branch is degenerate (zero eigenvalue) and Newton slows down; the branch is the same one.
+    clamps = path(t_next)
+    count = max(1, report.unstable_directions)
+    candidates = push_along_modes(props, clamps, trial, count)
+    relaxed = relax_to_stable(props, clamps, candidates, log)
+    if relaxed is None:
+        raise PlacementError(
+            f"placement phase '{phase}': the equilibrium lost stability between fractions {stable_t:.4f} and "
+            f"{unstable_t:.4f} and no stable equilibrium was found next to it"
+        )
+    best, distinct = relaxed
+    before = node_positions(props, clamps, trial)
+    after = node_positions(props, clamps, best)
+    jump = float(np.max(np.linalg.norm(after - before, axis=1)))
+    sides = "two mirror-image sides of equal energy; took the first" if len(distinct) > 1 else "one stable side"
+    log.events.append(
+        f"{phase}: stability lost between fractions {stable_t:.4f} and {unstable_t:.4f} "
+        f"({report.unstable_directions} unstable direction(s)); moved to the stable branch along the critical "
+        f"mode ({sides}); largest station movement {jump:.3f} mm"
+    )
+    return best, t_next
+
+
+def _snap_or_fail(phase, path, props, state, t, t_target, log, failure):
+    """Steps kept failing: the branch may end in a fold (the hose snaps).  Look for a stable
+    equilibrium downhill at the next fraction; fail with a clear message if there is none."""
+    t_target = min(1.0, t_target)
+    clamps = path(t_target)
+    relaxed = relax_to_stable(props, clamps, [state], log)
+    if relaxed is None:
+        raise PlacementError(
+            f"placement phase '{phase}' failed at fraction {t_target:.4f} (last converged {t:.4f}): "
+            f"Newton residual {failure.residual:.2e} after {failure.iterations} iterations ({failure.message}), "
+            "and no stable equilibrium could be found by energy descent"
+        )
+    best, _ = relaxed
+    jump = float(np.max(np.linalg.norm(node_positions(props, clamps, best) - node_positions(props, clamps, state), axis=1)))
+    log.events.append(
+        f"{phase}: the equilibrium branch ended near fraction {t:.4f} (fold); the hose snaps to a stable "
+        f"equilibrium {jump:.3f} mm away"
+    )
+    return best

@@ -1,0 +1,224 @@
+"""Placement of a hose by continuation: Keil & Thomas' divide and conquer.
+
+1. The hose starts straight on the start mount (its tangent along start.direction).
+2. Phase "place": its free end is carried to the end mount: the position along the
+   straight line to the end point, the frame rotated about n = t0 x t1 (the cross product
+   of the two tangents) into the end tangent t1 = -end.direction, while the end is free to
+   spin about its own axis (no twist locked in).  Gravity is ramped in with the same
+   fraction (a straight hose cannot carry a sideways load).
+3. The torque-free roll found there is recorded (the lock angle) and clamped.
+4. Phase "twist": the end fitting is turned about end.direction to the requested angle.
+
+The very first move shortens the chord of a straight, inextensible hose: a buckling
+bifurcation.  Both sides of the buckle in the bending plane are solved and the stable one
+of lower energy is kept (the end rotation decides it); the out-of-plane sides are tried
+only when neither in-plane side is stable.  Stability is monitored along the whole path
+(see continuation.py).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from hoseline.mechanics.newton import RodProperties, end_frame_of, node_positions, solve_equilibrium, total_energy
+from hoseline.mechanics.rod import Clamps, RodState
+from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rotation_matrix, rotation_vector
+from hoseline.model.problem import Problem
+from hoseline.procedures.continuation import (
+    ContinuationLog,
+    PlacementError,
+    Progress,
+    StepControl,
+    follow,
+    relax_to_stable,
+)
+from hoseline.procedures.result import Result
+from hoseline.procedures.stations import build_result
+from hoseline.procedures.symmetry import equivalent_states
+
+__all__ = ["solve", "PlacementError", "rod_properties"]
+
+
+def rod_properties(problem: Problem) -> RodProperties:
+    """Internal-unit rod properties of the problem's hose."""
+    hose = problem.hose
+    return RodProperties(hose.stiffness_vector, hose.segment_length, int(hose.segments))
+
+
+def weight_vector(problem: Problem) -> np.ndarray:
+    """Weight per length of the hose as a vector, N/mm (kg/m times m/s^2 = N/m = 1e-3 N/mm)."""
+    return problem.hose.mass_per_length * problem.gravity * 1e-3
+
+
+def placement_rotation(problem: Problem) -> tuple[np.ndarray, float]:
+    """Axis (unit) and angle (rad) of the rotation that turns the start tangent into the end tangent.
+
+    The axis is the cross product of the tangents; for parallel or antiparallel tangents it
+    is normal to the plane of the start tangent and the mount-to-mount vector (so the
+    tangent turns towards the end mount), or any normal if that plane is not defined.
+    """
+    t0 = problem.start.direction
+    t1 = -problem.end.direction
+    cross = np.cross(t0, t1)
+    angle = math.atan2(float(np.linalg.norm(cross)), float(np.dot(t0, t1)))
+    if np.linalg.norm(cross) > 1e-9:
+        return cross / np.linalg.norm(cross), angle
+    toward = np.cross(t0, problem.end.point - problem.start.point)
+    if np.linalg.norm(toward) > 1e-9 * problem.hose.length:
+        return toward / np.linalg.norm(toward), angle
+    return perpendicular(t0), angle
+
+
+def solve(
+    problem: Problem,
+    *,
+    progress: Progress | None = None,
+    alternatives: bool = False,
+    control: StepControl = StepControl(),
+) -> Result:
+    """Place the hose of `problem` and return its stable equilibrium.
+
+    progress: optional callable(phase, fraction) called after each continuation step.
+    alternatives: also return the other stable equilibria of equal energy (mirror images).
+    Raises PlacementError with the phase, fraction and residual when the path cannot be followed.
+    """
+    started = time.perf_counter()
+    props = rod_properties(problem)
+    log = ContinuationLog()
+    start_point = problem.start.point
+    start_frame = frame_from_tangent(problem.start.direction)
+    straight_end = start_point + props.length * problem.start.direction
+    axis, angle = placement_rotation(problem)
+    weight = weight_vector(problem)
+
+    def place_path(t: float) -> Clamps:
+        return Clamps(
+            start_point=start_point,
+            start_frame=start_frame,
+            end_point=(1.0 - t) * straight_end + t * problem.end.point,
+            end_frame=start_frame @ rotation_matrix(axis * (angle * t)).T,
+            roll_free=True,
+            line_weight=t * weight,
+        )
+
+    first = control.first
+    state = _initial_buckle(props, place_path, first, axis, log)
+    state = follow("place", place_path, props, state, log, start=first, control=control, progress=progress)
+
+    locked_frame = end_frame_of(place_path(1.0), state)
+    lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))
+    twist = math.radians(problem.end_twist_deg)
+    end_axis = problem.end.direction
+
+    def twist_path(t: float) -> Clamps:
+        return Clamps(
+            start_point=start_point,
+            start_frame=start_frame,
+            end_point=problem.end.point,
+            end_frame=locked_frame @ rotation_matrix(end_axis * (twist * t)).T,
+            roll_free=False,
+            line_weight=weight,
+        )
+
+    state = RodState(state.frames, state.end_force, 0.0)
+    if twist != 0.0:
+        twist_control = StepControl(
+            first=min(control.first, math.radians(30.0) / abs(twist)),
+            largest=min(control.largest, math.radians(45.0) / abs(twist)),
+            smallest=control.smallest,
+            tolerance=control.tolerance,
+        )
+        state = follow("twist", twist_path, props, state, log, control=twist_control, progress=progress)
+
+    final = twist_path(1.0)
+    state, report = solve_equilibrium(props, final, state, tolerance=control.tolerance)
+    log.iterations += report.iterations
+    if not report.converged or report.unstable_directions != 0:
+        raise PlacementError(
+            f"placement: the final equilibrium is not a converged stable state (residual {report.residual:.2e}, "
+            f"{report.unstable_directions} unstable directions)"
+        )
+    result = build_result(problem, props, final, state, lock_angle_deg, log, started, report.residual)
+    others = _verified_alternatives(props, final, state, equivalent_states(problem, props, final, state), control.tolerance)
+    if others:
+        result.unique = False
+        result.events.append(
+            f"not unique: {len(others)} other stable equilibri{'um' if len(others) == 1 else 'a'} of equal energy "
+            "(mirror image of this shape in the mounts' plane of symmetry); the hose can lie either way"
+        )
+        if alternatives:
+            result.alternatives = [
+                build_result(problem, props, final, alt, lock_angle_deg, log, started, report.residual) for alt in others
+            ]
+    result.wall_time = time.perf_counter() - started
+    return result
+
+
+def _verified_alternatives(props, clamps, state, images, tolerance) -> list[RodState]:
+    """The images that Newton confirms as stable equilibria distinct from `state`."""
+    nodes = node_positions(props, clamps, state)
+    confirmed = []
+    for image in images:
+        image, report = solve_equilibrium(props, clamps, image, tolerance=tolerance, max_iterations=5)
+        distinct = np.max(np.abs(node_positions(props, clamps, image) - nodes)) > 1e-6 * props.length
+        if report.converged and report.unstable_directions == 0 and distinct:
+            confirmed.append(image)
+    return confirmed
+
+
+def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.ndarray, log: ContinuationLog) -> RodState:
+    """Equilibrium at the first fraction of the place phase, where the straight hose has buckled.
+
+    Candidates: the clamped-clamped first buckling mode, bending about +axis and -axis
+    (in the plane the end rotation bends the hose), with the amplitude that takes up the
+    chord shortening, plus the end rotation spread linearly; both are relaxed downhill to
+    equilibrium and the stable one of lower energy is kept.  Out-of-plane sides are tried
+    only if neither in-plane side is stable.
+    """
+    clamps = place_path(fraction)
+    length = props.length
+    chord = float(np.linalg.norm(clamps.end_point - clamps.start_point))
+    shortening = max(length - chord, 1e-6 * length)
+    amplitude = 2.0 * math.sqrt(length * shortening) / math.pi  # w = A/2 (1 - cos 2 pi s / L)
+    s_mid = (np.arange(props.segments) + 0.5) * props.segment_length
+    slope = amplitude * math.pi / length * np.sin(2.0 * math.pi * s_mid / length)
+    end_rotation = _rotation_vector_between(clamps.start_frame, clamps.end_frame)
+    ramp = np.outer(s_mid / length, end_rotation)
+    tangent = clamps.start_frame[2]
+
+    def candidate(bend_axis: np.ndarray) -> RodState:
+        frames = np.empty((props.segments, 3, 3))
+        for i in range(props.segments):
+            frames[i] = clamps.start_frame @ (rotation_matrix(ramp[i]) @ rotation_matrix(bend_axis * slope[i])).T
+        return RodState(frames, np.zeros(3), 0.0)
+
+    out_of_plane = np.cross(tangent, axis)
+    for label, axes in (("in the bending plane", (axis, -axis)), ("out of the bending plane", (out_of_plane, -out_of_plane))):
+        candidates = [candidate(a) for a in axes]
+        relaxed = relax_to_stable(props, clamps, candidates, log)
+        if relaxed is None:
+            continue
+        best, distinct = relaxed
+        energies = sorted(total_energy(props, clamps, s) for s in distinct)
+        detail = (
+            f"the other side has energy {energies[1]:.4g} N*mm vs {energies[0]:.4g} N*mm"
+            if len(energies) > 1
+            else "both sides relaxed to the same equilibrium"
+        )
+        log.events.append(
+            f"place: the straight hose buckles at the first step (fraction {fraction:g}); tried both sides "
+            f"{label}, kept the stable one of lower energy ({detail})"
+        )
+        return best
+    raise PlacementError(
+        f"placement phase 'place' failed at fraction {fraction:g}: no stable buckled shape was found for the "
+        "first step from the straight hose"
+    )
+
+
+def _rotation_vector_between(frame_a: np.ndarray, frame_b: np.ndarray) -> np.ndarray:
+    """World rotation vector R with frame_b = frame_a @ R^T (rad)."""
+    return rotation_vector(frame_b.T @ frame_a)

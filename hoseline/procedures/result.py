@@ -1,0 +1,121 @@
+"""What a placement returns: the equilibrium shape and everything an engineer reads off it.
+
+All quantities in user units: mm, N, N*mm, N*mm (= mJ) for energy, degrees for angles.
+Station arrays have one row per node s_i = i * L / N, i = 0..N (node 0 at the start
+fitting tip, node N at the end fitting tip); frame arrays have one row per segment,
+at the segment midpoints.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hoseline.model.problem import Problem
+
+
+@dataclass
+class Result:
+    """Static equilibrium of a hose placed between two mounts.
+
+    problem: the problem solved.
+    s: (N+1,) arc length of the stations, mm.
+    centerline: (N+1, 3) station positions, mm.
+    frames: (N, 3, 3) material frame of each segment; frames[i, k] is director d_(k+1)
+        (d3 = tangent, d1 and d2 the section axes), world components.
+    curvature: (N+1,) bending curvature at the stations, 1/mm.
+    twist_rate: (N+1,) rate of twist at the stations, rad/mm.
+    bending_moment: (N+1,) magnitude of the bending moment, N*mm.
+    twisting_moment: (N+1,) twisting moment (component along the tangent), N*mm.
+    internal_moment: (N+1, 3) internal moment vector (exerted by the part s' > s on the part s' < s), N*mm.
+    internal_force: (N+1, 3) internal force vector, same convention, N.
+    start_force, start_moment: reaction of the start mount on the hose, N and N*mm (moment about the start point).
+    end_force, end_moment: reaction of the end mount on the hose, N and N*mm (moment about the end point).
+    elastic_energy, gravity_energy: N*mm (gravity energy relative to the straight start position... see docs).
+    stability_margin: smallest eigenvalue of the second variation of the energy over rotation
+        fields compatible with the clamps, per unit length (the discrete Hessian's eigenvalue
+        divided by the segment length, so it converges under refinement), N*mm/(rad^2*mm) = N/rad^2;
+        > 0 means stable.
+    lock_angle_deg: torque-free roll angle of the end fitting found in the placement, degrees.
+    min_bend_radius: smallest inside bend radius reached (centreline radius - outer radius), mm.
+    bend_radius_margin: min_bend_radius - hose.min_bend_radius, mm; None if the hose has no limit.
+    single_plane_offset: mm, distance of the end mount from the plane of both directions; None if undefined.
+    length_error: relative error of the centreline length (exact inextensibility: rounding only).
+    iterations: Newton iterations in total; steps: continuation steps in total.
+    wall_time: seconds for the whole placement.
+    unique: False when a second stable equilibrium of equal energy exists (e.g. a mirror image).
+    alternatives: other stable equilibria found (each a Result), when asked for.
+    events: human-readable log of what happened along the continuation (bifurcations, branch switches).
+    residual: final relative residual of the force and moment balance.
+    """
+
+    problem: Problem
+    s: np.ndarray
+    centerline: np.ndarray
+    frames: np.ndarray
+    curvature: np.ndarray
+    twist_rate: np.ndarray
+    bending_moment: np.ndarray
+    twisting_moment: np.ndarray
+    internal_moment: np.ndarray
+    internal_force: np.ndarray
+    start_force: np.ndarray
+    start_moment: np.ndarray
+    end_force: np.ndarray
+    end_moment: np.ndarray
+    elastic_energy: float
+    gravity_energy: float
+    stability_margin: float
+    lock_angle_deg: float
+    min_bend_radius: float
+    bend_radius_margin: float | None
+    single_plane_offset: float | None
+    length_error: float
+    iterations: int
+    steps: int
+    wall_time: float
+    residual: float
+    unique: bool = True
+    alternatives: list["Result"] = field(default_factory=list)
+    events: list[str] = field(default_factory=list)
+
+    @property
+    def stable(self) -> bool:
+        """True when the equilibrium is a strict local minimum of the energy."""
+        return self.stability_margin > 0.0
+
+    @property
+    def max_twisting_moment(self) -> float:
+        """Largest absolute twisting moment along the hose, N*mm."""
+        return float(np.max(np.abs(self.twisting_moment)))
+
+    def summary(self) -> dict:
+        """Scalars for reports and result.json (user units)."""
+        return {
+            "name": self.problem.name,
+            "length_mm": self.problem.hose.length,
+            "segments": self.problem.hose.segments,
+            "end_twist_deg": self.problem.end_twist_deg,
+            "lock_angle_deg": self.lock_angle_deg,
+            "elastic_energy_Nmm": self.elastic_energy,
+            "gravity_energy_Nmm": self.gravity_energy,
+            "stability_margin_N_per_rad2": float(self.stability_margin),
+            "stable": bool(self.stable),
+            "unique": bool(self.unique),
+            "min_bend_radius_mm": self.min_bend_radius,
+            "bend_radius_margin_mm": self.bend_radius_margin,
+            "single_plane_offset_mm": self.single_plane_offset,
+            "max_twisting_moment_Nmm": self.max_twisting_moment,
+            "max_bending_moment_Nmm": float(np.max(self.bending_moment)),
+            "start_force_N": self.start_force.tolist(),
+            "start_moment_Nmm": self.start_moment.tolist(),
+            "end_force_N": self.end_force.tolist(),
+            "end_moment_Nmm": self.end_moment.tolist(),
+            "length_error": self.length_error,
+            "residual": self.residual,
+            "iterations": self.iterations,
+            "continuation_steps": self.steps,
+            "wall_time_s": self.wall_time,
+            "events": list(self.events),
+        }

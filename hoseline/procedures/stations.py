@@ -1,0 +1,81 @@
+"""Turn an equilibrium state into a Result: stations, moments, forces, reactions, margins."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from hoseline.mechanics.energy import elastic_energy, joint_moments
+from hoseline.mechanics.newton import RodProperties, evaluate
+from hoseline.mechanics.rod import Clamps, RodState, centerline, gravity_energy
+from hoseline.mechanics.stability import smallest_eigenpairs
+from hoseline.model.mounts import single_plane_offset
+from hoseline.model.problem import Problem
+from hoseline.procedures.result import Result
+
+
+def build_result(
+    problem: Problem,
+    props: RodProperties,
+    clamps: Clamps,
+    state: RodState,
+    lock_angle_deg: float,
+    log,
+    started: float,
+    residual: float,
+) -> Result:
+    """Result of an equilibrium `state` under the final `clamps` (roll locked).
+
+    lock_angle_deg: degrees.  log: ContinuationLog with counters and events.
+    started: time.perf_counter() at the start of the solve.  residual: final relative residual.
+    """
+    h = props.segment_length
+    n_seg = props.segments
+    s = h * np.arange(n_seg + 1)
+    nodes = centerline(state.frames, clamps.start_point, h)
+    moments, darboux = joint_moments(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h)
+    tangents = np.vstack([clamps.start_frame[2], state.frames[:, 2], clamps.end_frame[2]])
+    node_tangent = tangents[:-1] + tangents[1:]
+    node_tangent /= np.linalg.norm(node_tangent, axis=1)[:, None]
+    twisting = np.einsum("ij,ij->i", moments, node_tangent)
+    bending = np.linalg.norm(moments - twisting[:, None] * node_tangent, axis=1)
+    curvature = np.hypot(darboux[:, 0], darboux[:, 1])
+    internal_force = state.end_force[None, :] + (props.length - s)[:, None] * clamps.line_weight[None, :]
+
+    system = evaluate(props, clamps, state)
+    values, _ = smallest_eigenpairs(system.band, system.jac_t, count=1)
+    max_curvature = float(np.max(curvature))
+    radius_outer = problem.hose.outer_radius
+    min_radius = (1.0 / max_curvature - radius_outer) if max_curvature > 0.0 else math.inf
+    limit = problem.hose.min_bend_radius
+    return Result(
+        problem=problem,
+        s=s,
+        centerline=nodes,
+        frames=state.frames.copy(),
+        curvature=curvature,
+        twist_rate=darboux[:, 2].copy(),
+        bending_moment=bending,
+        twisting_moment=twisting,
+        internal_moment=moments,
+        internal_force=internal_force,
+        start_force=-internal_force[0],
+        start_moment=-moments[0],
+        end_force=state.end_force.copy(),
+        end_moment=moments[-1].copy(),
+        elastic_energy=float(elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h)),
+        gravity_energy=gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h),
+        stability_margin=float(values[0]) / h,  # per unit length: independent of the segment count
+        lock_angle_deg=lock_angle_deg,
+        min_bend_radius=min_radius,
+        bend_radius_margin=None if limit is None else min_radius - limit,
+        single_plane_offset=single_plane_offset(problem.start, problem.end),
+        length_error=abs(float(np.sum(np.linalg.norm(state.frames[:, 2], axis=1))) * h - props.length) / props.length,
+        iterations=log.iterations,
+        steps=log.steps,
+        wall_time=time.perf_counter() - started,
+        residual=residual,
+        events=list(log.events),
+    )

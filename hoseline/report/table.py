@@ -1,0 +1,50 @@
+"""The summary an engineer reads first: one Rich table, one column per result."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from rich.table import Table
+
+from hoseline.procedures.result import Result
+
+
+def _number(value: float | None, digits: int = 4) -> str:
+    """`digits` significant digits; n/a for None; no minus sign on zero."""
+    return "n/a" if value is None else f"{value + 0.0:.{digits}g}"
+
+
+def _fixed(value: float | None, decimals: int = 2) -> str:
+    """`decimals` digits after the point (mm, degrees); n/a for None; no minus sign on zero."""
+    return "n/a" if value is None else f"{round(value, decimals) + 0.0:.{decimals}f}"
+
+
+# (quantity, unit, how to read it off a Result)
+ROWS: tuple[tuple[str, str, Callable[[Result], str]], ...] = (
+    ("end twist", "deg", lambda r: _fixed(r.problem.end_twist_deg, 1)),
+    ("lock angle", "deg", lambda r: _fixed(r.lock_angle_deg)),
+    ("elastic energy", "N*mm", lambda r: _number(r.elastic_energy)),
+    ("gravity energy", "N*mm", lambda r: _number(r.gravity_energy)),
+    ("stability margin", "N*mm/rad^2", lambda r: f"{_number(r.stability_margin)} ({'stable' if r.stable else 'UNSTABLE'})"),
+    ("unique shape", "", lambda r: "yes" if r.unique else "no: equal-energy twin"),
+    ("min inside bend radius", "mm", lambda r: _fixed(r.min_bend_radius)),
+    ("bend radius margin", "mm", lambda r: _fixed(r.bend_radius_margin)),
+    ("single-plane offset", "mm", lambda r: _fixed(r.single_plane_offset)),
+    ("max twisting moment", "N*mm", lambda r: _number(r.max_twisting_moment)),
+    ("max bending moment", "N*mm", lambda r: _number(float(r.bending_moment.max()))),
+    ("iterations / steps", "", lambda r: f"{r.iterations} / {r.steps}"),
+    ("residual", "", lambda r: _number(r.residual, 2)),
+    ("time", "s", lambda r: _fixed(r.wall_time)),
+)
+
+
+def summary_table(results: Sequence[Result], labels: Sequence[str], title: str = "hoseline") -> Table:
+    """A table with one row per quantity and one column per result (labels are the column heads)."""
+    table = Table(title=title)
+    table.add_column("quantity")
+    table.add_column("unit")
+    for label in labels:
+        table.add_column(label, justify="right")
+    for name, unit, read in ROWS:
+        table.add_row(name, unit, *(read(result) for result in results))
+    return table

@@ -1,0 +1,167 @@
+"""Placement by continuation: convergence order with both ends clamped, invariance,
+symmetry, torsion, branch choice and equilibrium of the reported loads."""
+
+import numpy as np
+import pytest
+
+from hoseline import Hose, Mount, Problem, solve
+from hoseline.mechanics.rotations import rotation_matrix
+
+THESIS_EI = 292.7985 * 510.8053
+THESIS_GJ = 96.12 * 25540.26
+
+
+def thesis_problem(twist=0.0, segments=100, torsional=THESIS_GJ, gravity=(0.0, 0.0, 0.0), mass=0.0):
+    hose = Hose(
+        length=330.6,
+        outer_diameter=10.1,
+        bending_stiffness=THESIS_EI,
+        torsional_stiffness=torsional,
+        mass_per_length=mass,
+        segments=segments,
+    )
+    return Problem(
+        hose,
+        Mount([-13.0, 0.0, -11.25], [0.0, 1.0, 0.0]),
+        Mount([-173.064, -7.0, -11.25], [1.0, 0.0, 0.0]),
+        end_twist_deg=twist,
+        gravity=np.array(gravity),
+    )
+
+
+@pytest.mark.parametrize("twist", [0.0, 180.0])
+def test_shape_converges_at_second_order_with_clamped_ends(twist):
+    """Stations at s = k L / 25 for 25/50/100/200 segments: differences fall 4x per halving."""
+    shapes = [solve(thesis_problem(twist, n)).centerline[:: n // 25] for n in (25, 50, 100, 200)]
+    differences = [np.max(np.linalg.norm(a - b, axis=1)) for a, b in zip(shapes[:-1], shapes[1:])]
+    orders = np.log2(np.array(differences[:-1]) / np.array(differences[1:]))
+    assert np.all(orders > 1.85), (differences, orders)
+
+
+def test_rigidly_moved_problem_gives_rigidly_moved_answer():
+    base = thesis_problem(90.0, 40, gravity=(0.0, 0.0, -9.81), mass=0.35)
+    rotation = rotation_matrix(np.array([0.3, -1.1, 0.7]))
+    shift = np.array([120.0, -40.0, 15.0])
+
+    def moved(mount):
+        return Mount(rotation @ mount.point + shift, rotation @ mount.direction)
+
+    problem = Problem(base.hose, moved(base.start), moved(base.end), 90.0, rotation @ base.gravity)
+    reference = solve(base)
+    result = solve(problem)
+    expected = reference.centerline @ rotation.T + shift
+    assert np.max(np.abs(result.centerline - expected)) < 1e-6
+    assert np.allclose(result.end_force, rotation @ reference.end_force, atol=1e-7)
+    assert result.elastic_energy == pytest.approx(reference.elastic_energy, rel=1e-9)
+
+
+def test_planar_u_bend_stays_planar_and_symmetric_at_zero_twist():
+    hose = Hose(length=400.0, outer_diameter=10.0, bending_stiffness=1.5e5, torsional_stiffness=2.5e6, segments=60)
+    start = Mount([0.0, 0.0, 0.0], [1.0, 0.0, 0.0])
+    end = Mount([0.0, 100.0, 0.0], [1.0, 0.0, 0.0])  # hose arrives along -x: a U-bend
+    result = solve(Problem(hose, start, end, 0.0))
+    assert np.max(np.abs(result.centerline[:, 2])) < 1e-9  # planar
+    mirrored = result.centerline[::-1] * np.array([1.0, -1.0, 1.0]) + np.array([0.0, 100.0, 0.0])
+    assert np.max(np.abs(mirrored - result.centerline)) < 1e-7  # symmetric about y = 50
+    assert result.stable
+    assert abs(result.lock_angle_deg) < 1e-6
+
+    twisted = solve(Problem(hose, start, end, 90.0))
+    assert np.max(np.abs(twisted.centerline[:, 2])) > 5.0  # twisting moves it out of plane
+
+
+def test_torsion_factor_changes_the_twisted_shape():
+    isotropic = solve(thesis_problem(180.0, 50, torsional=THESIS_EI / 1.5))
+    stiff = solve(thesis_problem(180.0, 50))
+    difference = np.max(np.linalg.norm(isotropic.centerline - stiff.centerline, axis=1))
+    assert difference > 5.0
+    # a torsionally stiffer hose carries a larger twisting moment for the same twist
+    assert stiff.max_twisting_moment > isotropic.max_twisting_moment
+
+
+def test_reported_loads_are_in_equilibrium():
+    """Reactions, weight and moments balance: sum of forces and of moments about the origin vanish."""
+    result = solve(thesis_problem(120.0, 60, gravity=(0.0, -3.0, -9.81), mass=0.4))
+    weight = result.problem.hose.mass_per_length * result.problem.gravity * 1e-3 * result.problem.hose.length
+    assert np.allclose(result.start_force + result.end_force + weight, 0.0, atol=1e-9)
+    nodes = result.centerline
+    mids = 0.5 * (nodes[1:] + nodes[:-1])
+    segment_weight = weight / (len(nodes) - 1)
+    moment = (
+        result.start_moment
+        + result.end_moment
+        + np.cross(nodes[0], result.start_force)
+        + np.cross(nodes[-1], result.end_force)
+        + np.sum(np.cross(mids, segment_weight), axis=0)
+    )
+    assert np.allclose(moment, 0.0, atol=1e-6 * np.max(np.abs(result.end_moment)))
+
+
+def test_result_is_exactly_inextensible_and_reaches_the_mount():
+    result = solve(thesis_problem(180.0))
+    assert result.length_error < 1e-12
+    assert np.linalg.norm(result.centerline[-1] - result.problem.end.point) < 1e-9
+    segment_lengths = np.linalg.norm(np.diff(result.centerline, axis=0), axis=1)
+    assert np.allclose(segment_lengths, 330.6 / 100, rtol=1e-12)
+    assert result.residual < 1e-10
+
+
+def test_mirror_image_answers_are_reported():
+    """Planar mounts twisted 180 deg: the shape leaves the plane and its mirror image is an
+    equally good answer."""
+    result = solve(thesis_problem(180.0, 50), alternatives=True)
+    assert not result.unique
+    assert len(result.alternatives) == 1
+    other = result.alternatives[0]
+    assert other.elastic_energy == pytest.approx(result.elastic_energy, rel=1e-9)
+    mirrored = result.centerline * np.array([1.0, 1.0, -1.0]) + np.array([0.0, 0.0, -22.5])
+    assert np.max(np.abs(other.centerline - mirrored)) < 1e-6
+    assert other.stable
+
+
+def test_first_step_buckles_to_the_stable_side():
+    """The first move compresses the straight hose; the side kept must be stable and not
+    higher in energy than the other side."""
+    from hoseline.mechanics.newton import solve_equilibrium, total_energy
+    from hoseline.procedures import placement
+
+    problem = thesis_problem(0.0, 40)
+    props = placement.rod_properties(problem)
+    seen = []
+    original = placement.relax_to_stable
+
+    def spy(props_, clamps, candidates, log):
+        outcome = original(props_, clamps, candidates, log)
+        seen.append((clamps, candidates, outcome))
+        return outcome
+
+    placement.relax_to_stable = spy
+    try:
+        solve(problem)
+    finally:
+        placement.relax_to_stable = original
+    clamps, candidates, (best, _) = seen[0]
+    energy_best = total_energy(props, clamps, best)
+    for candidate in candidates:
+        state, report = solve_equilibrium(props, clamps, candidate, max_iterations=40)
+        if report.converged:
+            assert total_energy(props, clamps, state) >= energy_best - 1e-9 * abs(energy_best)
+    _, report = solve_equilibrium(props, clamps, best)
+    assert report.converged and report.unstable_directions == 0
+
+
+def test_loss_of_stability_is_detected_and_reported():
+    """With the end free to spin, the planar thesis hose turns unstable out of plane during
+    the place phase; the continuation must notice it and say so."""
+    result = solve(thesis_problem(0.0, 50))
+    assert any("stability lost" in event for event in result.events)
+    assert result.stable
+
+
+def test_gravity_is_carried_and_sags_the_hose():
+    light = solve(thesis_problem(0.0, 40))
+    heavy = solve(thesis_problem(0.0, 40, gravity=(0.0, 0.0, -9.81), mass=2.0))
+    sag = np.min(heavy.centerline[:, 2] - light.centerline[:, 2])
+    assert sag < -0.5
+    total_weight = 2.0 * 9.81e-3 * 330.6
+    assert heavy.start_force[2] + heavy.end_force[2] == pytest.approx(total_weight, rel=1e-9)
