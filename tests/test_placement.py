@@ -165,3 +165,41 @@ def test_gravity_is_carried_and_sags_the_hose():
     assert sag < -0.5
     total_weight = 2.0 * 9.81e-3 * 330.6
     assert heavy.start_force[2] + heavy.end_force[2] == pytest.approx(total_weight, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    "end_point, end_direction, length",
+    [
+        ([100.0, 0.0, 0.0], [-1.0, 0.0, 0.0], 110.0),  # mounts on one axis, facing each other
+        ([100.0, 0.0, 0.0], [1.0, 0.0, 0.0], 400.0),  # on one axis, facing away: a loop
+    ],
+)
+def test_axisymmetric_mounts_are_neutral_and_reported_not_unique(end_point, end_direction, length):
+    """Mounts on one axis: the hose may turn about it at no cost; the result says so."""
+    hose = Hose(length=length, outer_diameter=10.0, bending_stiffness=1.5e5, torsional_stiffness=2.5e6, segments=40)
+    result = solve(Problem(hose, Mount([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]), Mount(end_point, end_direction)))
+    assert result.stable
+    assert result.stability_margin == 0.0
+    assert not result.unique
+    assert any("neutral" in event for event in result.events)
+
+
+def test_random_problems_solve_to_stable_converged_answers():
+    """A spread of mount layouts, lengths, twists, weights and torsion factors."""
+    rng = np.random.default_rng(2024)
+    for _ in range(12):
+        start, end = rng.normal(size=3) * 50.0, rng.normal(size=3) * 150.0
+        distance = np.linalg.norm(end - start)
+        hose = Hose(
+            length=distance * rng.uniform(1.05, 3.0),
+            outer_diameter=10.0,
+            bending_stiffness=1.5e5,
+            torsional_stiffness=rng.choice([1.0, 10.0, 25.0]) * 1e5,
+            mass_per_length=rng.choice([0.0, 0.5]),
+            segments=30,
+        )
+        twist = rng.uniform(-360.0, 360.0)
+        problem = Problem(hose, Mount(start, rng.normal(size=3)), Mount(end, rng.normal(size=3)), twist, np.array([0, 0, -9.81]))
+        result = solve(problem)
+        assert result.stable and result.residual < 1e-10
+        assert np.linalg.norm(result.centerline[-1] - end) < 1e-8

@@ -23,7 +23,8 @@ def ldlt_banded(band, shift):
     """Factor (H + shift*I) given in lower band storage band[i, k] = H[i, i-k].
 
     Returns (unit_lower, diagonal, tiny) with unit_lower[i, k] = L[i, i-k] (k >= 1) and
-    tiny True when a pivot was negligible against the matrix scale (factor unusable).
+    tiny True when a pivot was negligible against the matrix scale; such a pivot is
+    replaced by the matrix scale, which keeps steps out of that (neutral) direction.
     """
     n, width = band.shape
     p = width - 1
@@ -41,8 +42,10 @@ def ldlt_banded(band, shift):
             value -= lower[j, k] ** 2 * diag[m]
         diag[j] = value
         if abs(value) <= 1e-13 * scale:
+            # an exactly neutral direction (a symmetry of the problem): count it as neither
+            # stable nor unstable and do not move along it (a pivot of the matrix's own scale)
             tiny = True
-            diag[j] = 1e-13 * scale if value >= 0 else -1e-13 * scale
+            diag[j] = scale
         for i in range(j + 1, min(n, j + p + 1)):
             value = band[i, i - j]
             for k in range(i - j + 1, min(p, i) + 1):
@@ -85,19 +88,29 @@ def _ldlt_solve_columns(lower, diag, rhs):
     return x
 
 
+NEUTRAL = 1e-10  # pivots and eigenvalues below this fraction of the largest count as zero
+
+
 @njit(cache=True)
 def count_negative(values):
-    """How many entries are negative."""
+    """How many entries are clearly negative (below -NEUTRAL times the largest magnitude).
+
+    A symmetry of the problem (e.g. mounts on one axis, free to turn about it) gives an
+    exactly zero eigenvalue; rounding must not turn that neutral direction into an unstable one.
+    """
+    largest = 0.0
+    for v in values:
+        largest = max(largest, abs(v))
     count = 0
     for v in values:
-        if v < 0.0:
+        if v < -NEUTRAL * largest:
             count += 1
     return count
 
 
 @njit(cache=True)
 def symmetric_3x3_positive_count(s):
-    """How many eigenvalues of a symmetric 3x3 matrix are positive (closed-form eigenvalues)."""
+    """How many eigenvalues of a symmetric 3x3 matrix are clearly positive (closed-form eigenvalues)."""
     p1 = s[0, 1] ** 2 + s[0, 2] ** 2 + s[1, 2] ** 2
     mean = (s[0, 0] + s[1, 1] + s[2, 2]) / 3.0
     p2 = (s[0, 0] - mean) ** 2 + (s[1, 1] - mean) ** 2 + (s[2, 2] - mean) ** 2 + 2.0 * p1
@@ -114,7 +127,8 @@ def symmetric_3x3_positive_count(s):
     largest = mean + 2.0 * p * np.cos(phi)
     smallest = mean + 2.0 * p * np.cos(phi + 2.0 * np.pi / 3.0)
     middle = 3.0 * mean - largest - smallest
-    return int(largest > 0.0) + int(middle > 0.0) + int(smallest > 0.0)
+    zero = NEUTRAL * max(abs(largest), abs(smallest))
+    return int(largest > zero) + int(middle > zero) + int(smallest > zero)
 
 
 @njit(cache=True)

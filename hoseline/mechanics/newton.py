@@ -26,7 +26,7 @@ from numba import njit
 
 from hoseline.mechanics.banded import banded_matvec, count_negative, kkt_solve, ldlt_banded, ldlt_solve
 from hoseline.mechanics.energy import BANDWIDTH, assemble
-from hoseline.mechanics.rod import Clamps, RodState, centerline, constraint_jacobian_t, gravity_energy, segment_loads
+from hoseline.mechanics.rod import Clamps, RodState, centerline, constraint_jacobian_t, segment_loads
 from hoseline.mechanics.rotations import rotate_frames, rotation_matrix
 
 
@@ -41,6 +41,10 @@ class RodProperties:
     @property
     def length(self) -> float:
         return self.segment_length * self.segments
+
+    @property
+    def largest_stiffness(self) -> float:
+        return float(np.max(self.stiffness))
 
 
 @dataclass
@@ -76,49 +80,73 @@ def end_frame_of(clamps: Clamps, state: RodState) -> np.ndarray:
     return clamps.end_frame @ rotation_matrix(state.roll * clamps.end_frame[2]).T
 
 
-@njit(cache=True)
-def _tip(frames, start_point, h):
-    tip = start_point.copy()
-    for i in range(frames.shape[0]):
-        tip += h * frames[i, 2]
-    return tip
-
-
 def moment_scale(props: RodProperties, state: RodState, clamps: Clamps) -> float:
     """Moment (N*mm) against which residuals are measured: max stiffness / L plus force * L."""
     length = props.length
-    force = float(np.linalg.norm(state.end_force)) + float(np.linalg.norm(clamps.line_weight)) * length
-    return float(np.max(props.stiffness)) / length + force * length
+    force = math.sqrt(float(state.end_force @ state.end_force)) + math.sqrt(float(clamps.line_weight @ clamps.line_weight)) * length
+    return props.largest_stiffness / length + force * length
+
+
+@njit(cache=True)
+def _system_kernel(frames, start_point, start_frame, end_point, end_frame, stiffness, h, force, line_weight, roll_free, end_clamped):
+    """One pass over the rod: loads, energy, gradient, banded Hessian, constraint and its Jacobian."""
+    n_seg = frames.shape[0]
+    n = 3 * n_seg + (1 if roll_free else 0)
+    grad = np.empty(n)
+    band = np.empty((n, BANDWIDTH + 1))
+    loads = segment_loads(frames, force, line_weight, h)
+    elastic, _ = assemble(frames, start_frame, end_frame, stiffness, h, loads, roll_free, grad, band, end_clamped)
+    jac_t = np.zeros((n, 3))
+    tip = start_point.copy()
+    weight_potential = 0.0
+    for i in range(n_seg):
+        for k in range(3):
+            weight_potential -= h * line_weight[k] * (tip[k] - start_point[k] + 0.5 * h * frames[i, 2, k])
+            tip[k] += h * frames[i, 2, k]
+    if end_clamped:
+        jac_t[: 3 * n_seg] = constraint_jacobian_t(frames, h)
+        constraint = tip - end_point
+    else:
+        constraint = np.zeros(3)
+        for k in range(3):
+            weight_potential -= force[k] * (tip[k] - start_point[k])  # potential of the dead tip load
+    grad_max = 0.0
+    for value in grad:
+        grad_max = max(grad_max, abs(value))
+    gap = max(abs(constraint[0]), abs(constraint[1]), abs(constraint[2]))
+    return elastic + weight_potential, grad, band, jac_t, constraint, grad_max, gap
 
 
 def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
     """Assemble the Lagrangian's gradient and Hessian, the constraint and the residual at a state."""
-    n_seg = props.segments
     roll_free = clamps.roll_free and clamps.end_clamped
-    n = 3 * n_seg + (1 if roll_free else 0)
-    grad = np.empty(n)
-    band = np.empty((n, BANDWIDTH + 1))
-    h = props.segment_length
     force = state.end_force if clamps.end_clamped else clamps.end_load
-    loads = segment_loads(state.frames, force, clamps.line_weight, h)
-    end_frame = end_frame_of(clamps, state)
-    e_el, _ = assemble(
-        state.frames, clamps.start_frame, end_frame, props.stiffness, h, loads, roll_free, grad, band, clamps.end_clamped
+    end_point = clamps.end_point if clamps.end_clamped else clamps.start_point
+    energy, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
+        state.frames,
+        clamps.start_point,
+        clamps.start_frame,
+        end_point,
+        end_frame_of(clamps, state),
+        props.stiffness,
+        props.segment_length,
+        force,
+        clamps.line_weight,
+        roll_free,
+        clamps.end_clamped,
     )
-    jac_t = np.zeros((n, 3))
-    tip = _tip(state.frames, clamps.start_point, h)
-    e_g = gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h)
-    if clamps.end_clamped:
-        jac_t[: 3 * n_seg] = constraint_jacobian_t(state.frames, h)
-        constraint = tip - clamps.end_point
-    else:
-        constraint = np.zeros(3)
-        e_g -= float(clamps.end_load @ (tip - clamps.start_point))  # potential of the dead tip load
-    residual = max(
-        float(np.max(np.abs(grad))) / moment_scale(props, state, clamps),
-        float(np.max(np.abs(constraint))) / props.length,
-    )
-    return System(e_el + e_g, grad, band, jac_t, constraint, residual, clamps.end_clamped)
+    residual = max(grad_max / moment_scale(props, state, clamps), gap / props.length)
+    return System(energy, grad, band, jac_t, constraint, residual, clamps.end_clamped)
+
+
+@njit(cache=True)
+def _step_kernel(band, jac_t, grad, constraint, shift, constrained):
+    lower, diag, tiny = ldlt_banded(band, shift)
+    if constrained:
+        step, force_step, unstable = kkt_solve(lower, diag, jac_t, grad, constraint)
+        return step, force_step, unstable, tiny
+    step = -ldlt_solve(lower, diag, grad)
+    return step, np.zeros(3), count_negative(diag), tiny
 
 
 def newton_step(system: System, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int, bool]:
@@ -128,12 +156,10 @@ def newton_step(system: System, shift: float = 0.0) -> tuple[np.ndarray, np.ndar
     the change of the end force (N), the number of negative eigenvalues of H + shift I on the
     constraint tangent space, and whether the factorisation met a negligible pivot.
     """
-    lower, diag, tiny = ldlt_banded(system.band, shift)
-    if system.constrained:
-        step, force_step, unstable = kkt_solve(lower, diag, system.jac_t, system.grad, system.constraint)
-        return step, force_step, int(unstable), tiny
-    step = -ldlt_solve(lower, diag, system.grad)
-    return step, np.zeros(3), int(count_negative(diag)), tiny
+    step, force_step, unstable, tiny = _step_kernel(
+        system.band, system.jac_t, system.grad, system.constraint, shift, system.constrained
+    )
+    return step, force_step, int(unstable), bool(tiny)
 
 
 def total_energy(props: RodProperties, clamps: Clamps, state: RodState) -> float:
@@ -176,7 +202,7 @@ def solve_equilibrium(
             return state, NewtonReport(False, iteration, math.inf, -1, "non-finite residual")
         step, force_step, unstable, tiny = newton_step(system)
         if system.residual <= tolerance:
-            return state, NewtonReport(True, iteration, system.residual, -1 if tiny else int(unstable))
+            return state, NewtonReport(True, iteration, system.residual, int(unstable))
         if iteration == max_iterations:
             break
         alpha = 1.0
@@ -214,10 +240,10 @@ def _minimise(props, clamps, state, tolerance, max_iterations):
             return state, NewtonReport(False, iteration, math.inf, -1, "non-finite residual")
         step, force_step, unstable, tiny = newton_step(system)
         if system.residual <= tolerance:
-            return state, NewtonReport(True, iteration, system.residual, -1 if tiny else int(unstable))
+            return state, NewtonReport(True, iteration, system.residual, int(unstable))
         if iteration == max_iterations:
             break
-        if unstable == 0 and not tiny and sigma == 0.0 and system.residual < 1e-6:
+        if unstable == 0 and sigma == 0.0 and system.residual < 1e-6:
             # close to a stable minimum: plain Newton, judged by the residual
             trial = apply_step(props, clamps, state, step, force_step)
             trial_system = evaluate(props, clamps, trial)
@@ -227,10 +253,10 @@ def _minimise(props, clamps, state, tolerance, max_iterations):
             sigma = sigma_floor
         base_constraint = float(system.constraint @ system.constraint)
         for _ in range(40):
-            if sigma > 0.0 or unstable != 0 or tiny:
+            if sigma > 0.0 or unstable != 0:
                 sigma = max(sigma, sigma_floor)
                 step, force_step, unstable_s, tiny_s = newton_step(system, sigma)
-                if unstable_s != 0 or tiny_s:
+                if unstable_s != 0:
                     sigma *= 4.0
                     continue
             # merit: Lagrangian plus a penalty on the end-position error that makes the

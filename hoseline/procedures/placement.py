@@ -142,6 +142,8 @@ def solve(
             f"{report.unstable_directions} unstable directions)"
         )
     result = build_result(problem, props, final, state, lock_angle_deg, log, started, report.residual)
+    if result.stability_margin == 0.0:
+        result.unique = False  # neutral: a continuous family of equal shapes
     others = _verified_alternatives(props, final, state, equivalent_states(problem, props, final, state), control.tolerance)
     if others:
         result.unique = False

@@ -82,8 +82,8 @@ class Result:
 
     @property
     def stable(self) -> bool:
-        """True when the equilibrium is a strict local minimum of the energy."""
-        return self.stability_margin > 0.0
+        """True when the equilibrium is a local minimum of the energy (margin 0: neutral, e.g. free to turn)."""
+        return self.stability_margin >= 0.0
 
     @property
     def max_twisting_moment(self) -> float:

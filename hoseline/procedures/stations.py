@@ -15,6 +15,8 @@ from hoseline.model.mounts import single_plane_offset
 from hoseline.model.problem import Problem
 from hoseline.procedures.result import Result
 
+NEUTRAL_MARGIN = 1e-6  # margins below this fraction of EI/L^2 are rounding of an exact zero
+
 
 def build_result(
     problem: Problem,
@@ -46,6 +48,14 @@ def build_result(
 
     system = evaluate(props, clamps, state)
     values, _ = smallest_eigenpairs(system.band, system.jac_t, count=1)
+    margin = float(values[0]) / h  # per unit length: independent of the segment count
+    events = list(log.events)
+    if abs(margin) < NEUTRAL_MARGIN * props.largest_stiffness / props.length**2:
+        margin = 0.0
+        events.append(
+            "neutral stability: one way of deforming costs no energy (a symmetry of the mounts, e.g. "
+            "turning the whole hose about the common axis of both fittings); the shape is not unique"
+        )
     max_curvature = float(np.max(curvature))
     radius_outer = problem.hose.outer_radius
     min_radius = (1.0 / max_curvature - radius_outer) if max_curvature > 0.0 else math.inf
@@ -67,7 +77,7 @@ def build_result(
         end_moment=moments[-1].copy(),
         elastic_energy=float(elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h)),
         gravity_energy=gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h),
-        stability_margin=float(values[0]) / h,  # per unit length: independent of the segment count
+        stability_margin=margin,
         lock_angle_deg=lock_angle_deg,
         min_bend_radius=min_radius,
         bend_radius_margin=None if limit is None else min_radius - limit,
@@ -77,5 +87,5 @@ def build_result(
         steps=log.steps,
         wall_time=time.perf_counter() - started,
         residual=residual,
-        events=list(log.events),
+        events=events,
     )

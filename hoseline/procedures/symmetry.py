@@ -47,7 +47,7 @@ def _symmetries(problem: Problem, props: RodProperties) -> list[tuple[np.ndarray
     t0, t1 = problem.start.direction, -problem.end.direction
     delta = problem.end.point - problem.start.point
     tol = 1e-9
-    gravity = problem.gravity
+    gravity = problem.gravity * problem.hose.mass_per_length  # only the weight matters
     normal = np.cross(t0, t1)
     if np.linalg.norm(normal) < tol:
         normal = np.cross(t0, delta)
