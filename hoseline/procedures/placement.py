@@ -149,7 +149,8 @@ def solve(
         result.unique = False
         result.events.append(
             f"not unique: {len(others)} other stable equilibri{'um' if len(others) == 1 else 'a'} of equal energy "
-            "(mirror image of this shape in the mounts' plane of symmetry); the hose can lie either way"
+            "(the image of this shape under the mounts' symmetry: a mirror image in their common plane, or "
+            "a half turn about their common axis); the hose can lie either way"
         )
         if alternatives:
             result.alternatives = [
