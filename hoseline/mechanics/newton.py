@@ -44,7 +44,7 @@ class RodProperties:
 
     @property
     def largest_stiffness(self) -> float:
-        return float(np.max(self.stiffness))
+        return float(max(self.stiffness))
 
 
 @dataclass
@@ -75,16 +75,9 @@ def end_frame_of(clamps: Clamps, state: RodState) -> np.ndarray:
     """The end fitting frame including the free roll accumulated in the state (identity for a free tip)."""
     if not clamps.end_clamped:
         return np.eye(3)
-    if not clamps.roll_free or state.roll == 0.0:
+    if not clamps.roll_free:
         return clamps.end_frame
-    return clamps.end_frame @ rotation_matrix(state.roll * clamps.end_frame[2]).T
-
-
-def moment_scale(props: RodProperties, state: RodState, clamps: Clamps) -> float:
-    """Moment (N*mm) against which residuals are measured: max stiffness / L plus force * L."""
-    length = props.length
-    force = math.sqrt(float(state.end_force @ state.end_force)) + math.sqrt(float(clamps.line_weight @ clamps.line_weight)) * length
-    return props.largest_stiffness / length + force * length
+    return _roll_frame(clamps.end_frame, state.roll)
 
 
 @njit(cache=True)
@@ -135,7 +128,8 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
         roll_free,
         clamps.end_clamped,
     )
-    residual = max(grad_max / moment_scale(props, state, clamps), gap / props.length)
+    force = state.end_force if clamps.end_clamped else clamps.end_load
+    residual = _residual(grad_max, gap, force, clamps.line_weight, props.largest_stiffness, props.length)
     return System(energy, grad, band, jac_t, constraint, residual, clamps.end_clamped)
 
 
@@ -196,26 +190,90 @@ def solve_equilibrium(
     """
     if minimise:
         return _minimise(props, clamps, state, tolerance, max_iterations)
-    system = evaluate(props, clamps, state)
+    roll_free = clamps.roll_free and clamps.end_clamped
+    frames, force, roll, converged, iterations, residual, unstable, failure = _track_kernel(
+        state.frames,
+        state.end_force if clamps.end_clamped else clamps.end_load,
+        state.roll,
+        clamps.start_point,
+        clamps.start_frame,
+        clamps.end_point if clamps.end_clamped else clamps.start_point,
+        clamps.end_frame if clamps.end_clamped else np.eye(3),
+        props.stiffness,
+        props.segment_length,
+        clamps.line_weight,
+        roll_free,
+        clamps.end_clamped,
+        props.largest_stiffness,
+        tolerance,
+        max_iterations,
+    )
+    message = ("", "non-finite residual", "line search failed", "iteration limit reached")[failure]
+    new_state = RodState(frames, force if clamps.end_clamped else state.end_force, roll)
+    return new_state, NewtonReport(bool(converged), int(iterations), float(residual), int(unstable), message)
+
+
+@njit(cache=True)
+def _roll_frame(frame, roll):
+    """The frame turned by `roll` (rad) about its own d3."""
+    if roll == 0.0:
+        return frame
+    return frame @ rotation_matrix(roll * frame[2]).T
+
+
+@njit(cache=True)
+def _residual(grad_max, gap, force, line_weight, largest_stiffness, length):
+    weight = math.sqrt(line_weight[0] ** 2 + line_weight[1] ** 2 + line_weight[2] ** 2)
+    scale = largest_stiffness / length + (math.sqrt(force[0] ** 2 + force[1] ** 2 + force[2] ** 2) + weight * length) * length
+    return max(grad_max / scale, gap / length)
+
+
+@njit(cache=True)
+def _track_kernel(
+    frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
+    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations,
+):
+    """Plain Newton iterations with step halving, all in compiled code (see solve_equilibrium).
+
+    Returns (frames, force, roll, converged, iterations, residual, unstable, failure) with
+    failure 0 = none, 1 = non-finite, 2 = line search failed, 3 = iteration limit.
+    """
+    n_seg = frames.shape[0]
+    length = h * n_seg
+    _, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
+        frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
+        roll_free, end_clamped,
+    )
+    residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, length)
+    unstable = -1
     for iteration in range(max_iterations + 1):
-        if not np.isfinite(system.residual):
-            return state, NewtonReport(False, iteration, math.inf, -1, "non-finite residual")
-        step, force_step, unstable, tiny = newton_step(system)
-        if system.residual <= tolerance:
-            return state, NewtonReport(True, iteration, system.residual, int(unstable))
+        if not np.isfinite(residual):
+            return frames, force, roll, False, iteration, residual, -1, 1
+        step, force_step, unstable, _ = _step_kernel(band, jac_t, grad, constraint, 0.0, end_clamped)
+        if residual <= tolerance:
+            return frames, force, roll, True, iteration, residual, unstable, 0
         if iteration == max_iterations:
             break
         alpha = 1.0
+        accepted = False
         for _ in range(8):
-            trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
-            trial_system = evaluate(props, clamps, trial)
-            if trial_system.residual < (1.0 - 1e-4 * alpha) * system.residual or trial_system.residual <= tolerance:
+            trial_frames = rotate_frames(frames, (alpha * step[: 3 * n_seg]).reshape(n_seg, 3))
+            trial_force = force + alpha * force_step
+            trial_roll = roll + (alpha * step[3 * n_seg] if roll_free else 0.0)
+            _, t_grad, t_band, t_jac_t, t_constraint, t_grad_max, t_gap = _system_kernel(
+                trial_frames, start_point, start_frame, end_point, _roll_frame(end_frame, trial_roll), stiffness, h,
+                trial_force, line_weight, roll_free, end_clamped,
+            )
+            trial_residual = _residual(t_grad_max, t_gap, trial_force, line_weight, largest_stiffness, length)
+            if trial_residual < (1.0 - 1e-4 * alpha) * residual or trial_residual <= tolerance:
+                accepted = True
                 break
             alpha *= 0.5
-        else:
-            return state, NewtonReport(False, iteration + 1, system.residual, int(unstable), "line search failed")
-        state, system = trial, trial_system
-    return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
+        if not accepted:
+            return frames, force, roll, False, iteration + 1, residual, unstable, 2
+        frames, force, roll = trial_frames, trial_force, trial_roll
+        grad, band, jac_t, constraint, residual = t_grad, t_band, t_jac_t, t_constraint, trial_residual
+    return frames, force, roll, False, max_iterations, residual, -1, 3
 
 
 def _lagrangian(system: System, force: np.ndarray) -> float:

@@ -85,14 +85,14 @@ def relax_to_stable(
 
 
 def push_along_modes(props: RodProperties, clamps: Clamps, state: RodState, count: int) -> list[RodState]:
-    """States displaced to both sides along the `count` lowest eigenvectors (0.02 rad at most)."""
+    """States displaced to both sides along the `count` lowest eigenvectors (0.05 rad at most)."""
     system = evaluate(props, clamps, state)
     _, vectors = smallest_eigenpairs(system.band, system.jac_t, count=count)
     n_rot = 3 * props.segments
     pushed = []
     for j in range(vectors.shape[1]):
         mode = vectors[:, j]
-        amplitude = 0.02 / max(np.max(np.abs(mode[:n_rot])), 1e-12)
+        amplitude = 0.05 / max(np.max(np.abs(mode[:n_rot])), 1e-12)
         for sign in (1.0, -1.0):
             step = sign * amplitude * mode
             pushed.append(apply_step(props, clamps, state, step, np.zeros(3)))

@@ -24,6 +24,10 @@ class Result:
     centerline: (N+1, 3) station positions, mm.
     frames: (N, 3, 3) material frame of each segment; frames[i, k] is director d_(k+1)
         (d3 = tangent, d1 and d2 the section axes), world components.
+    start_frame, end_frame: (3, 3) frames of the two fittings as clamped (rows d1, d2, d3;
+        d3 along the hose tangent, so end_frame[2] = -end.direction), the end frame including
+        the lock angle and the twist.  With `frames` and `end_force` they are the state from
+        which a later solve (e.g. a sweep of moving mounts) continues.
     curvature: (N+1,) bending curvature at the stations, 1/mm.
     twist_rate: (N+1,) rate of twist at the stations, rad/mm.
     bending_moment: (N+1,) magnitude of the bending moment, N*mm.
@@ -54,6 +58,8 @@ class Result:
     s: np.ndarray
     centerline: np.ndarray
     frames: np.ndarray
+    start_frame: np.ndarray
+    end_frame: np.ndarray
     curvature: np.ndarray
     twist_rate: np.ndarray
     bending_moment: np.ndarray

@@ -65,6 +65,8 @@ def build_result(
         s=s,
         centerline=nodes,
         frames=state.frames.copy(),
+        start_frame=clamps.start_frame.copy(),
+        end_frame=clamps.end_frame.copy(),
         curvature=curvature,
         twist_rate=darboux[:, 2].copy(),
         bending_moment=bending,
