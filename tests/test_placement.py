@@ -209,3 +209,34 @@ def test_random_problems_solve_to_stable_converged_answers():
         result = solve(problem)
         assert result.stable and result.residual < 1e-10
         assert np.linalg.norm(result.centerline[-1] - end) < 1e-8
+
+
+def test_a_failing_solve_says_where_and_why(monkeypatch):
+    """If Newton cannot converge along the path, the error names the phase, the fraction,
+    the residual and the iterations, and no result is returned."""
+    from hoseline.mechanics.newton import NewtonReport
+    from hoseline.procedures import continuation, placement
+
+    real_solve = continuation.solve_equilibrium
+    real_relax = continuation.relax_to_stable
+    calls = {"relax": 0}
+
+    def never_converges(props, clamps, state, **kwargs):
+        return state, NewtonReport(False, 25, 3.2e-3, -1, "iteration limit reached")
+
+    def relax_once(props, clamps, candidates, log):
+        calls["relax"] += 1
+        if calls["relax"] > 1:
+            return None  # no stable state downhill either
+        # the first call (the buckle of the straight hose) works, with the real Newton
+        monkeypatch.setattr(continuation, "solve_equilibrium", real_solve)
+        try:
+            return real_relax(props, clamps, candidates, log)
+        finally:
+            monkeypatch.setattr(continuation, "solve_equilibrium", never_converges)
+
+    monkeypatch.setattr(continuation, "solve_equilibrium", never_converges)
+    monkeypatch.setattr(continuation, "relax_to_stable", relax_once)
+    monkeypatch.setattr(placement, "relax_to_stable", relax_once)
+    with pytest.raises(placement.PlacementError, match=r"phase 'place' failed at fraction 0\.\d+.*residual 3\.20e-03 after 25 iterations"):
+        solve(thesis_problem(0.0, 20))

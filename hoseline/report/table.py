@@ -25,7 +25,7 @@ ROWS: tuple[tuple[str, str, Callable[[Result], str]], ...] = (
     ("lock angle", "deg", lambda r: _fixed(r.lock_angle_deg)),
     ("elastic energy", "N*mm", lambda r: _number(r.elastic_energy)),
     ("gravity energy", "N*mm", lambda r: _number(r.gravity_energy)),
-    ("stability margin", "N*mm/rad^2", lambda r: f"{_number(r.stability_margin)} ({'stable' if r.stable else 'UNSTABLE'})"),
+    ("stability margin", "N/rad^2", lambda r: f"{_number(r.stability_margin)} ({'stable' if r.stable else 'UNSTABLE'})"),
     ("unique shape", "", lambda r: "yes" if r.unique else "no: equal-energy twin"),
     ("min inside bend radius", "mm", lambda r: _fixed(r.min_bend_radius)),
     ("bend radius margin", "mm", lambda r: _fixed(r.bend_radius_margin)),
