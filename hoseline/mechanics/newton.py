@@ -143,19 +143,6 @@ def _step_kernel(band, jac_t, grad, constraint, shift, constrained):
     return step, np.zeros(3), count_negative(diag), tiny
 
 
-def newton_step(system: System, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int, bool]:
-    """Newton step of (H + shift I) with the end constraint (when the end is clamped).
-
-    Returns (step, force_step, unstable_directions, tiny_pivot): the step in rotations (rad),
-    the change of the end force (N), the number of negative eigenvalues of H + shift I on the
-    constraint tangent space, and whether the factorisation met a negligible pivot.
-    """
-    step, force_step, unstable, tiny = _step_kernel(
-        system.band, system.jac_t, system.grad, system.constraint, shift, system.constrained
-    )
-    return step, force_step, int(unstable), bool(tiny)
-
-
 def total_energy(props: RodProperties, clamps: Clamps, state: RodState) -> float:
     """Elastic plus gravity energy, N*mm."""
     return evaluate(props, clamps, state).energy
@@ -167,11 +154,6 @@ def apply_step(props: RodProperties, clamps: Clamps, state: RodState, step: np.n
     frames = rotate_frames(state.frames, step[: 3 * n_seg].reshape(n_seg, 3))
     roll = state.roll + (float(step[3 * n_seg]) if step.size > 3 * n_seg else 0.0)
     return RodState(frames, state.end_force + force_step, roll)
-
-
-def inertia(system: System) -> int:
-    """Number of negative eigenvalues of the Hessian on the constraint tangent space."""
-    return newton_step(system)[2]
 
 
 def solve_equilibrium(
@@ -188,10 +170,9 @@ def solve_equilibrium(
     Returns the final state and a report; the state is only meaningful when report.converged.
     tolerance: relative residual of force and moment balance.  minimise: see module doc.
     """
-    if minimise:
-        return _minimise(props, clamps, state, tolerance, max_iterations)
+    kernel = _minimise_kernel if minimise else _track_kernel
     roll_free = clamps.roll_free and clamps.end_clamped
-    frames, force, roll, converged, iterations, residual, unstable, failure = _track_kernel(
+    frames, force, roll, converged, iterations, residual, unstable, failure = kernel(
         state.frames,
         state.end_force if clamps.end_clamped else clamps.end_load,
         state.roll,
@@ -208,7 +189,7 @@ def solve_equilibrium(
         tolerance,
         max_iterations,
     )
-    message = ("", "non-finite residual", "line search failed", "iteration limit reached")[failure]
+    message = ("", "non-finite residual", "no acceptable step found", "iteration limit reached")[failure]
     new_state = RodState(frames, force if clamps.end_clamped else state.end_force, roll)
     return new_state, NewtonReport(bool(converged), int(iterations), float(residual), int(unstable), message)
 
@@ -276,69 +257,90 @@ def _track_kernel(
     return frames, force, roll, False, max_iterations, residual, -1, 3
 
 
-def _lagrangian(system: System, force: np.ndarray) -> float:
-    return system.energy - float(force @ system.constraint)
-
-
-def _minimise(props, clamps, state, tolerance, max_iterations):
+@njit(cache=True)
+def _minimise_kernel(
+    frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
+    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations,
+):
     """Levenberg-Marquardt / trust-region Newton that only accepts steps lowering the energy.
 
     The Hessian is shifted by sigma*I, sigma at least large enough for a positive definite
     Hessian on the tangent space; sigma shrinks after good steps (ratio of actual to predicted
     decrease > 0.75) and grows after poor ones, so the method ends as plain Newton at a
-    stable minimum.
+    stable minimum.  The merit is the Lagrangian (with the current end force) plus a penalty
+    on the end-position error large enough that the predicted change is a decrease.
+    Returns like _track_kernel; failure 2 means no descent step was found.
     """
-    system = evaluate(props, clamps, state)
-    diag_scale = float(np.max(np.abs(system.band[:, 0])))
+    n_seg = frames.shape[0]
+    length = h * n_seg
+    energy, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
+        frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
+        roll_free, end_clamped,
+    )
+    residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, length)
+    diag_scale = 0.0
+    for i in range(band.shape[0]):
+        diag_scale = max(diag_scale, abs(band[i, 0]))
     sigma_floor = 1e-10 * diag_scale
     sigma = 0.0
     penalty = 0.0
     for iteration in range(max_iterations + 1):
-        if not np.isfinite(system.residual):
-            return state, NewtonReport(False, iteration, math.inf, -1, "non-finite residual")
-        step, force_step, unstable, tiny = newton_step(system)
-        if system.residual <= tolerance:
-            return state, NewtonReport(True, iteration, system.residual, int(unstable))
+        if not np.isfinite(residual):
+            return frames, force, roll, False, iteration, residual, -1, 1
+        step, force_step, unstable, _ = _step_kernel(band, jac_t, grad, constraint, 0.0, end_clamped)
+        if residual <= tolerance:
+            return frames, force, roll, True, iteration, residual, unstable, 0
         if iteration == max_iterations:
             break
-        if unstable == 0 and sigma == 0.0 and system.residual < 1e-6:
-            # close to a stable minimum: plain Newton, judged by the residual
-            trial = apply_step(props, clamps, state, step, force_step)
-            trial_system = evaluate(props, clamps, trial)
-            if trial_system.residual < system.residual:
-                state, system = trial, trial_system
-                continue
-            sigma = sigma_floor
-        base_constraint = float(system.constraint @ system.constraint)
+        plain_newton = unstable == 0 and sigma == 0.0 and residual < 1e-6
+        base_constraint = constraint[0] ** 2 + constraint[1] ** 2 + constraint[2] ** 2
+        accepted = False
         for _ in range(40):
-            if sigma > 0.0 or unstable != 0:
+            if not plain_newton and (sigma > 0.0 or unstable != 0):
                 sigma = max(sigma, sigma_floor)
-                step, force_step, unstable_s, tiny_s = newton_step(system, sigma)
-                if unstable_s != 0:
-                    sigma *= 4.0
+                step, force_step, shifted_unstable, _ = _step_kernel(band, jac_t, grad, constraint, sigma, end_clamped)
+                if shifted_unstable != 0:
+                    sigma *= 10.0
                     continue
-            # merit: Lagrangian plus a penalty on the end-position error that makes the
-            # predicted change negative (the step removes the linearised error)
-            model = float(system.grad @ step + 0.5 * step @ banded_matvec(system.band, step))
+            trial_frames = rotate_frames(frames, step[: 3 * n_seg].reshape(n_seg, 3))
+            trial_force = force + force_step
+            trial_roll = roll + (step[3 * n_seg] if roll_free else 0.0)
+            t_energy, t_grad, t_band, t_jac_t, t_constraint, t_grad_max, t_gap = _system_kernel(
+                trial_frames, start_point, start_frame, end_point, _roll_frame(end_frame, trial_roll), stiffness, h,
+                trial_force, line_weight, roll_free, end_clamped,
+            )
+            trial_residual = _residual(t_grad_max, t_gap, trial_force, line_weight, largest_stiffness, length)
+            if plain_newton:
+                # close to a stable minimum: plain Newton, judged by the residual
+                if trial_residual < residual:
+                    accepted = True
+                    break
+                plain_newton = False
+                sigma = sigma_floor
+                continue
+            model = grad @ step + 0.5 * (step @ banded_matvec(band, step))
             if base_constraint > 0.0:
                 penalty = max(penalty, 2.0 * max(model, 0.0) / base_constraint + 1e-8 * diag_scale)
             predicted = model - 0.5 * penalty * base_constraint
-            base = _lagrangian(system, state.end_force) + 0.5 * penalty * base_constraint
-            trial = apply_step(props, clamps, state, step, force_step)
-            trial_system = evaluate(props, clamps, trial)
-            trial_constraint = float(trial_system.constraint @ trial_system.constraint)
-            actual = _lagrangian(trial_system, state.end_force) + 0.5 * penalty * trial_constraint - base
+            base = energy - force @ constraint + 0.5 * penalty * base_constraint
+            trial_constraint = t_constraint[0] ** 2 + t_constraint[1] ** 2 + t_constraint[2] ** 2
+            actual = t_energy - force @ t_constraint + 0.5 * penalty * trial_constraint - base
             rounding = 1e-13 * (abs(base) + diag_scale)
-            ratio = actual / predicted if predicted < -rounding else (1.0 if actual <= rounding else -1.0)
-            if ratio > 0.1 or trial_system.residual <= tolerance:
+            if predicted < -rounding:
+                ratio = actual / predicted
+            else:
+                ratio = 1.0 if actual <= rounding else -1.0
+            if ratio > 0.1 or trial_residual <= tolerance:
                 if ratio > 0.75:
                     sigma = 0.0 if sigma <= sigma_floor * 4.0 else sigma / 4.0
+                accepted = True
                 break
             sigma = max(4.0 * sigma, 1e-4 * diag_scale)
-        else:
-            return state, NewtonReport(False, iteration + 1, system.residual, int(unstable), "no descent step found")
-        state, system = trial, trial_system
-    return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
+        if not accepted:
+            return frames, force, roll, False, iteration + 1, residual, unstable, 2
+        frames, force, roll = trial_frames, trial_force, trial_roll
+        energy, grad, band, jac_t, constraint, residual = t_energy, t_grad, t_band, t_jac_t, t_constraint, trial_residual
+    return frames, force, roll, False, max_iterations, residual, -1, 3
 
 
 def node_positions(props: RodProperties, clamps: Clamps, state: RodState) -> np.ndarray:
