@@ -112,15 +112,27 @@ def lowest_bending_omega(p: common.HoseProblem, density: float) -> float:
 
 
 def stable_time_step(p: common.HoseProblem, segments: int, density: float) -> float:
-    """Time step [s]: CFL fraction of the fastest wave time across one element, sqrt(rho / max(E, G)) * dl."""
+    """Time step [s]: CFL fraction of the axial wave time across one element, dl sqrt(rho / E).
+
+    With the shear modulus tied to E and the torsional rotary inertia scaled (see
+    build_rod), the axial wave is the fastest mode of the discrete rod.
+    """
     dl = p.length / segments
-    modulus = max(p.equivalent_youngs_modulus, p.equivalent_shear_modulus)
-    return CFL * dl * np.sqrt(density / modulus)
+    return CFL * dl * np.sqrt(density / p.equivalent_youngs_modulus)
 
 
 def build_rod(p: common.HoseProblem, segments: int, density: float, perturb: bool = True):
-    """Straight rod from the start mount along t0, start frame as in common.start_frame()."""
+    """Straight rod from the start mount along t0 with the start frame of common.start_frame().
+
+    Stiffnesses: E = EI / I gives EI and the stretch stiffness EA; the transverse shear
+    stiffness uses G_s = E / 3 (incompressible rubber, PyElastica's default); the
+    torsional stiffness is then overwritten with the hose's GJ (braided hoses are much
+    stiffer in torsion than their rubber). The polar rotary inertia is scaled by
+    GJ / (G_s J) so the torsional wave is no faster than the shear wave; rotary
+    inertia does not affect the equilibrium, only the stable time step.
+    """
     frame = common.start_frame(p)
+    shear_modulus = p.equivalent_youngs_modulus / 3.0
     rod = ea.CosseratRod.straight_rod(
         n_elements=segments,
         start=p.start_point.astype(float),
@@ -130,8 +142,12 @@ def build_rod(p: common.HoseProblem, segments: int, density: float, perturb: boo
         base_radius=p.outer_radius,
         density=density,
         youngs_modulus=p.equivalent_youngs_modulus,
-        shear_modulus=p.equivalent_shear_modulus,
+        shear_modulus=shear_modulus,
     )
+    rod.bend_matrix[2, 2, :] = p.torsional_stiffness
+    inertia_scale = p.torsional_stiffness / (shear_modulus * 2.0 * p.section_inertia)
+    rod.mass_second_moment_of_inertia[2, 2, :] *= inertia_scale
+    rod.inv_mass_second_moment_of_inertia[2, 2, :] /= inertia_scale
     if perturb:
         s = np.linspace(0.0, p.length, segments + 1)
         rod.position_collection += common.perturbation_shape(s, p).T

@@ -210,6 +210,20 @@ def _residual(grad_max, gap, force, line_weight, largest_stiffness, length):
 
 
 @njit(cache=True)
+def _state_system(
+    frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
+    roll_free, end_clamped, largest_stiffness,
+):
+    """_system_kernel at a state with the end frame turned by `roll`, plus its relative residual."""
+    energy, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
+        frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
+        roll_free, end_clamped,
+    )
+    residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, h * frames.shape[0])
+    return energy, grad, band, jac_t, constraint, residual
+
+
+@njit(cache=True)
 def _track_kernel(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
     roll_free, end_clamped, largest_stiffness, tolerance, max_iterations,
@@ -220,12 +234,10 @@ def _track_kernel(
     failure 0 = none, 1 = non-finite, 2 = line search failed, 3 = iteration limit.
     """
     n_seg = frames.shape[0]
-    length = h * n_seg
-    _, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
-        frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
-        roll_free, end_clamped,
+    _, grad, band, jac_t, constraint, residual = _state_system(
+        frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
+        roll_free, end_clamped, largest_stiffness,
     )
-    residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, length)
     unstable = -1
     for iteration in range(max_iterations + 1):
         if not np.isfinite(residual):
@@ -241,11 +253,10 @@ def _track_kernel(
             trial_frames = rotate_frames(frames, (alpha * step[: 3 * n_seg]).reshape(n_seg, 3))
             trial_force = force + alpha * force_step
             trial_roll = roll + (alpha * step[3 * n_seg] if roll_free else 0.0)
-            _, t_grad, t_band, t_jac_t, t_constraint, t_grad_max, t_gap = _system_kernel(
-                trial_frames, start_point, start_frame, end_point, _roll_frame(end_frame, trial_roll), stiffness, h,
-                trial_force, line_weight, roll_free, end_clamped,
+            _, t_grad, t_band, t_jac_t, t_constraint, trial_residual = _state_system(
+                trial_frames, trial_force, trial_roll, start_point, start_frame, end_point, end_frame, stiffness, h,
+                line_weight, roll_free, end_clamped, largest_stiffness,
             )
-            trial_residual = _residual(t_grad_max, t_gap, trial_force, line_weight, largest_stiffness, length)
             if trial_residual < (1.0 - 1e-4 * alpha) * residual or trial_residual <= tolerance:
                 accepted = True
                 break
@@ -272,12 +283,10 @@ def _minimise_kernel(
     Returns like _track_kernel; failure 2 means no descent step was found.
     """
     n_seg = frames.shape[0]
-    length = h * n_seg
-    energy, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
-        frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
-        roll_free, end_clamped,
+    energy, grad, band, jac_t, constraint, residual = _state_system(
+        frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
+        roll_free, end_clamped, largest_stiffness,
     )
-    residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, length)
     diag_scale = 0.0
     for i in range(band.shape[0]):
         diag_scale = max(diag_scale, abs(band[i, 0]))
@@ -305,11 +314,10 @@ def _minimise_kernel(
             trial_frames = rotate_frames(frames, step[: 3 * n_seg].reshape(n_seg, 3))
             trial_force = force + force_step
             trial_roll = roll + (step[3 * n_seg] if roll_free else 0.0)
-            t_energy, t_grad, t_band, t_jac_t, t_constraint, t_grad_max, t_gap = _system_kernel(
-                trial_frames, start_point, start_frame, end_point, _roll_frame(end_frame, trial_roll), stiffness, h,
-                trial_force, line_weight, roll_free, end_clamped,
+            t_energy, t_grad, t_band, t_jac_t, t_constraint, trial_residual = _state_system(
+                trial_frames, trial_force, trial_roll, start_point, start_frame, end_point, end_frame, stiffness, h,
+                line_weight, roll_free, end_clamped, largest_stiffness,
             )
-            trial_residual = _residual(t_grad_max, t_gap, trial_force, line_weight, largest_stiffness, length)
             if plain_newton:
                 # close to a stable minimum: plain Newton, judged by the residual
                 if trial_residual < residual:
