@@ -45,6 +45,7 @@ class ContinuationLog:
     iterations: int = 0
     steps: int = 0
     events: list[str] = field(default_factory=list)
+    equal_energy_choice: bool = False  # a branch was chosen between distinct stable states of equal energy
 
 
 @dataclass(frozen=True)
@@ -76,12 +77,14 @@ def relax_to_stable(
     if not stable:
         return None
     stable.sort(key=lambda pair: pair[0])
-    distinct: list[RodState] = []
-    for _, state in stable:
+    distinct: list[tuple[float, RodState]] = []
+    for energy, state in stable:
         nodes = node_positions(props, clamps, state)
-        if all(np.max(np.abs(nodes - node_positions(props, clamps, other))) > 1e-6 * props.length for other in distinct):
-            distinct.append(state)
-    return stable[0][1], distinct
+        if all(np.max(np.abs(nodes - node_positions(props, clamps, other))) > 1e-6 * props.length for _, other in distinct):
+            distinct.append((energy, state))
+    if len(distinct) > 1 and distinct[1][0] - distinct[0][0] <= 1e-9 * abs(distinct[0][0]):
+        log.equal_energy_choice = True
+    return stable[0][1], [state for _, state in distinct]
 
 
 def push_along_modes(props: RodProperties, clamps: Clamps, state: RodState, count: int) -> list[RodState]:
@@ -184,7 +187,7 @@ def _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, 
     before = node_positions(props, clamps, trial)
     after = node_positions(props, clamps, best)
     jump = float(np.max(np.linalg.norm(after - before, axis=1)))
-    sides = "two mirror-image sides of equal energy; took the first" if len(distinct) > 1 else "one stable side"
+    sides = f"{len(distinct)} stable sides; took the one of lowest energy" if len(distinct) > 1 else "one stable side"
     log.events.append(
         f"{phase}: stability lost between fractions {stable_t:.4f} and {unstable_t:.4f} "
         f"({report.unstable_directions} unstable direction(s)); moved to the stable branch along the critical "

@@ -144,6 +144,12 @@ def solve(
     result = build_result(problem, props, final, state, lock_angle_deg, log, started, report.residual)
     if result.stability_margin == 0.0:
         result.unique = False  # neutral: a continuous family of equal shapes
+    if log.equal_energy_choice:
+        result.unique = False
+        result.events.append(
+            "not unique: on the way the hose reached a fork of stable branches of equal energy (a symmetric "
+            "bifurcation) and this result follows one of them; the other branch is an equally likely assembly"
+        )
     others = _verified_alternatives(props, final, state, equivalent_states(problem, props, final, state), control.tolerance)
     if others:
         result.unique = False
@@ -205,15 +211,11 @@ def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.
         if relaxed is None:
             continue
         best, distinct = relaxed
-        energies = sorted(total_energy(props, clamps, s) for s in distinct)
-        detail = (
-            f"the other side has energy {energies[1]:.4g} N*mm vs {energies[0]:.4g} N*mm"
-            if len(energies) > 1
-            else "both sides relaxed to the same equilibrium"
-        )
+        energies = ", ".join(f"{total_energy(props, clamps, state):.6g}" for state in distinct)
         log.events.append(
-            f"place: the straight hose buckles at the first step (fraction {fraction:g}); tried both sides "
-            f"{label}, kept the stable one of lower energy ({detail})"
+            f"place: the straight hose buckles at the first step (fraction {fraction:g}); both sides {label} "
+            f"were relaxed: {len(distinct)} distinct stable equilibri{'um' if len(distinct) == 1 else 'a'} "
+            f"(energy {energies} N*mm); kept the lowest"
         )
         return best
     raise PlacementError(
