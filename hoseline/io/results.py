@@ -19,8 +19,10 @@ STATION_UNITS = {
     "twist_rate": "rad/mm",
     "bending_moment": "N*mm",
     "twisting_moment": "N*mm",
+    "internal_moment": "N*mm",
     "internal_force": "N",
 }
+SEGMENT_UNITS = {"frames": "unit vectors: per segment [d1, d2, d3], d3 the tangent, at s = (i + 1/2) L / N"}
 
 
 def write_results(result: Result, out_dir: str | Path) -> Path:
@@ -28,7 +30,8 @@ def write_results(result: Result, out_dir: str | Path) -> Path:
 
     centerline.csv: header s,x,y,z, one row per station from the start to the end fitting, mm.
     result.json: {"summary": result.summary(), "problem": the input in the problem-file
-    format, "units": units of the station arrays, "stations": {name: per-station values}}.
+    format, "units": units of the arrays, "stations": {name: per-station values},
+    "segments": {"frames": per-segment material frames}, "fittings": the two clamped fitting frames}.
     Non-finite numbers are written as null (JSON has no NaN).
     Returns out_dir.
     """
@@ -54,8 +57,10 @@ def result_document(result: Result) -> dict:
         {
             "summary": result.summary(),
             "problem": problem_to_dict(result.problem),
-            "units": STATION_UNITS,
+            "units": {**STATION_UNITS, **SEGMENT_UNITS},
             "stations": stations,
+            "segments": {"frames": result.frames},
+            "fittings": {"start_frame": result.start_frame, "end_frame": result.end_frame},
         }
     )
 
