@@ -89,25 +89,27 @@ def test_quiet_prints_nothing(tmp_path):
     assert output == ""
 
 
-def test_demo_writes_both_twists_and_the_picture(tmp_path, monkeypatch):
-    monkeypatch.setattr(cli, "run_demo", partial(demo.run_demo, segments=10))
+def test_demo_writes_both_twists_the_exports_and_the_picture(tmp_path, monkeypatch):
+    monkeypatch.setattr(demo, "run_demo", partial(demo.run_demo, segments=10))
     out = tmp_path / "demo"
     code, output = run("demo", "-o", out)
     assert code == 0, output
     assert "twist 180" in output
+    exports = ("hose.igs", "hose.step", "hose.stl", "hose.ply", "hose.glb", "hose.cmd")
     for twist in ("000", "180"):
-        for name in ("problem.toml", "centerline.csv", "result.json"):
+        for name in ("problem.toml", "centerline.csv", "result.json") + exports:
             assert (out / f"twist_{twist}" / name).is_file()
+    assert output.count("hose.step (") == 2  # each export reported with its size and time
     assert (out / "shapes.png").read_bytes().startswith(b"\x89PNG")
     copied = load_problem(out / "twist_180" / "problem.toml")
     assert problem_to_dict(copied) == problem_to_dict(demo.demo_problem(180.0, segments=10))
 
 
-def test_demo_mounts_follow_the_thesis_convention():
+def test_demo_mounts_come_from_the_thesis_iges_file():
     problem = demo.demo_problem(0.0)
-    np.testing.assert_allclose(problem.start.point, demo.B)
+    np.testing.assert_allclose(problem.start.point, [-13.0, 0.0, -11.25])  # B
     np.testing.assert_allclose(problem.start.direction, [0.0, 1.0, 0.0])  # A -> B
-    np.testing.assert_allclose(problem.end.point, demo.D)
+    np.testing.assert_allclose(problem.end.point, [-173.064, -7.0, -11.25])  # D
     np.testing.assert_allclose(problem.end.direction, [1.0, 0.0, 0.0])  # D -> C
     assert problem.hose.bending_stiffness == pytest.approx(149563.0, rel=1e-6)
     assert problem.hose.torsional_stiffness == pytest.approx(2454930.0, rel=1e-6)

@@ -22,6 +22,20 @@ The format, in the units of a hose catalogue (mm, N*mm^2, kg/m, degrees, m/s^2):
     [environment]
     gravity = [0.0, 0.0, -9.81]      # m/s^2, optional
 
+Instead of the points and directions of [start] and [end], the mounts can come from
+named points of an IGES file (CATIA and others); [end] then holds only the twist::
+
+    [mounts]
+    iges = "mounts.igs"                  # relative to the problem file
+    start = { tip = "B", behind = "A" }  # default: the hose leaves B along A->B
+    end = { tip = "D", ahead = "C" }     # default: the hose leaves D along D->C
+    [end]
+    twist = 180.0
+
+Each fitting names its tip and one more point on its axis, either `behind` the tip (the
+hose leaves the tip along behind->tip) or `ahead` of it on the hose side (the hose leaves
+the tip along tip->ahead).
+
 Exactly one of bending_stiffness / youngs_modulus.  At most one of
 torsional_stiffness / torsion_factor; without either, torsion_factor = 1, the
 isotropic GJ = EI / (1 + poisson_ratio) with poisson_ratio 0.5 unless given.
@@ -34,6 +48,8 @@ from __future__ import annotations
 import difflib
 import json
 import math
+import tomllib
+import typing
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -51,11 +67,6 @@ from hoseline.model.hose import (
 )
 from hoseline.model.mounts import Mount
 from hoseline.model.problem import Problem
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
 
 
 class ProblemFileError(ValueError):
@@ -76,6 +87,10 @@ _UNITS = {
     "direction": "from the fitting into the hose",
     "twist": "degrees, end fitting about its direction",
     "gravity": "m/s^2",
+    "iges": "IGES file with the named mount points, relative to the problem file",
+    "tip": "label of the fitting tip point",
+    "behind": "label of a point on the fitting axis behind the tip",
+    "ahead": "label of a point on the fitting axis ahead of the tip",
 }
 
 
@@ -223,10 +238,27 @@ class EnvironmentSection(_Section):
     gravity: Vector = Field(default_factory=lambda: [0.0, 0.0, 0.0])
 
 
+class FittingSection(_Section):
+    """[mounts] start and end: labels of the fitting tip and of one more point on its axis."""
+
+    tip: str
+    behind: str | None = None
+    ahead: str | None = None
+
+
+class MountsSection(_Section):
+    """[mounts]: the mounts from the named points (entity 116) of an IGES file."""
+
+    iges: str
+    start: FittingSection | None = None  # default: the thesis' B with A behind it
+    end: FittingSection | None = None  # default: the thesis' D with C ahead of it
+
+
 class ProblemFile(_Section):
-    """The whole problem file."""
+    """The whole problem file ([mounts] is resolved into [start] and [end] before this model sees it)."""
 
     name: str = "hose"
+    mounts: MountsSection | None = None
     hose: HoseSection
     start: MountSection
     end: EndSection
@@ -276,6 +308,8 @@ def _section_model(loc: tuple) -> type[BaseModel] | None:
     for part in loc:
         field = model.model_fields.get(part) if isinstance(part, str) else None
         annotation = field.annotation if field else None
+        if typing.get_origin(annotation) is not None:  # `Section | None`: the section
+            annotation = next((a for a in typing.get_args(annotation) if a is not type(None)), None)
         if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
             return None
         model = annotation
@@ -322,22 +356,19 @@ def _message(error: dict) -> str:
     return f"{_path(loc)} = {_show(value)}: {reason}"
 
 
-def problem_from_dict(data: dict, source: str = "<dict>") -> Problem:
+def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> Problem:
     """Validate a parsed problem file and build the Problem.
 
     data: the file's content as nested dicts (keys and units as in the module docstring).
     source: where the data came from, put in front of error messages (a file name).
+    base_dir: directory that a relative [mounts] iges path is taken from (default: the current one).
     Raises ProblemFileError naming the field, the value and the fix.
     """
     if not isinstance(data, dict):
         raise ProblemFileError(f"{source}: expected tables [hose], [start] and [end], got {type(data).__name__}")
-    try:
-        spec = ProblemFile.model_validate(data)
-    except pydantic.ValidationError as exc:
-        # an unknown key first: a misspelt key also shows up as a missing one
-        errors = sorted(exc.errors(), key=lambda error: error["type"] != "extra_forbidden")
-        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
-        raise ProblemFileError(f"{source}: {_message(errors[0])}{more}") from None
+    if "mounts" in data:
+        data = _with_mounts_from_iges(data, source, Path.cwd() if base_dir is None else Path(base_dir))
+    spec = _validated(ProblemFile, data, source)
     bending, torsional = spec.hose.stiffnesses()
     try:
         hose = Hose(
@@ -362,12 +393,60 @@ def problem_from_dict(data: dict, source: str = "<dict>") -> Problem:
         raise ProblemFileError(f"{source}: {exc}") from None
 
 
+def _validated(model: type[BaseModel], data: Any, source: str, loc: tuple = ()) -> Any:
+    """`model` validated from `data` (found at `loc` in the file), or ProblemFileError with the first problem."""
+    try:
+        return model.model_validate(data)
+    except pydantic.ValidationError as exc:
+        # an unknown key first: a misspelt key also shows up as a missing one
+        errors = sorted(exc.errors(), key=lambda error: error["type"] != "extra_forbidden")
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        first = {**errors[0], "loc": loc + tuple(errors[0]["loc"])}
+        raise ProblemFileError(f"{source}: {_message(first)}{more}") from None
+
+
+def _with_mounts_from_iges(data: dict, source: str, base_dir: Path) -> dict:
+    """`data` with [mounts] replaced by the [start] and [end] points and directions read from its IGES file."""
+    from hoseline.io import iges_mounts  # imports OpenCASCADE (about a second): only when a file needs it
+
+    mounts = _validated(MountsSection, data["mounts"], source, ("mounts",))
+    end = data.get("end", {})
+    given = ["start"] if "start" in data else []
+    given += [f"end.{key}" for key in ("point", "direction") if isinstance(end, dict) and key in end]
+    if given:
+        raise ProblemFileError(
+            f"{source}: {' and '.join(given)} given together with [mounts]: the mounts come from {mounts.iges}; "
+            "remove " + ", ".join(given) + " (keep [end] twist), or remove [mounts]"
+        )
+    labels = {"start": iges_mounts.THESIS_START, "end": iges_mounts.THESIS_END}
+    for name in labels:
+        fitting = getattr(mounts, name)
+        try:
+            labels[name] = iges_mounts.FittingLabels(**fitting.model_dump()) if fitting else labels[name]
+        except ValueError as exc:
+            raise ProblemFileError(f"{source}: mounts.{name}: {exc}") from None
+    path = base_dir / mounts.iges
+    try:
+        start, end_mount = iges_mounts.mounts_from_iges(path, labels["start"], labels["end"])
+    except iges_mounts.IgesError as exc:
+        raise ProblemFileError(f"{source}: mounts.iges: {exc}") from None
+    except OSError as exc:
+        reason = exc.strerror or exc
+        raise ProblemFileError(f"{source}: mounts.iges = {_show(mounts.iges)}: cannot read {path}: {reason}") from None
+    resolved = {key: value for key, value in data.items() if key != "mounts"}
+    resolved["start"] = {"point": _floats(start.point), "direction": _floats(start.direction)}
+    if isinstance(end, dict):
+        resolved["end"] = {**end, "point": _floats(end_mount.point), "direction": _floats(end_mount.direction)}
+    return resolved
+
+
 def load_problem(path: str | Path) -> Problem:
     """Read a TOML problem file.
 
     path: the file; its stem is the problem name unless the file gives `name`.
-    Raises ProblemFileError for invalid content (with the TOML line for syntax errors)
-    and OSError (e.g. FileNotFoundError) when the file cannot be read.
+    Raises ProblemFileError for invalid content (with the TOML line for syntax errors, and
+    for a [mounts] IGES file that cannot give the mounts) and OSError (e.g.
+    FileNotFoundError) when the problem file itself cannot be read.
     """
     path = Path(path)
     with path.open("rb") as stream:
@@ -378,7 +457,7 @@ def load_problem(path: str | Path) -> Problem:
         except UnicodeDecodeError:
             raise ProblemFileError(f"{path}: not UTF-8 text: save the problem file as UTF-8") from None
     data.setdefault("name", path.stem)
-    return problem_from_dict(data, source=str(path))
+    return problem_from_dict(data, source=str(path), base_dir=path.parent)
 
 
 def problem_to_dict(problem: Problem) -> dict:

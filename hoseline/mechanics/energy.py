@@ -27,6 +27,10 @@ Hessian below are those of E(delta) at delta = 0 (exact, no approximation), whic
 what Newton's method on the rotation group needs.  Derivation in docs/model.md;
 verified against finite differences in tests/test_energy_derivatives.py.
 
+Stiffener springs.  Optionally (`springs`, see mechanics/stiffeners.py) the thesis' off-axis
+springs add their energy, gradient and Hessian blocks to every joint; with springs None
+(the default) Numba compiles that branch away, so the plain rod runs as before.
+
 Written by hand (Numba) because no library offers this rod; everything is a plain
 loop over joints so the cost is linear in N.
 """
@@ -35,6 +39,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from hoseline.mechanics.stiffeners import FULL, HALF, spring_energy, spring_terms_into
 
 BANDWIDTH = 5  # half bandwidth of the Hessian: 3x3 blocks, neighbours only
 
@@ -178,14 +184,23 @@ def joint_energy(frame_a, frame_b, stiffness, joint_length):
 
 
 @njit(cache=True)
-def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True):
-    """Total elastic energy (N*mm) of the rod; the last joint only when the end is clamped."""
+def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None):
+    """Total elastic energy (N*mm) of the rod; the last joint only when the end is clamped.
+
+    springs: stiffener springs (mechanics/stiffeners.py) or None.
+    """
     n = frames.shape[0]
     total = joint_energy(start_frame, frames[0], stiffness, 0.5 * h)
     for i in range(n - 1):
         total += joint_energy(frames[i], frames[i + 1], stiffness, h)
     if end_clamped:
         total += joint_energy(frames[n - 1], end_frame, stiffness, 0.5 * h)
+    if springs is not None:
+        total += spring_energy(start_frame, frames[0], springs, HALF)
+        for i in range(n - 1):
+            total += spring_energy(frames[i], frames[i + 1], springs, FULL)
+        if end_clamped:
+            total += spring_energy(frames[n - 1], end_frame, springs, HALF)
     return total
 
 
@@ -206,13 +221,16 @@ def _add_lower_block_transposed(band, row0, col0, block):
 
 
 @njit(cache=True)
-def assemble(frames, start_frame, end_frame, stiffness, h, segment_loads, roll_free, grad, band, end_clamped=True):
+def assemble(
+    frames, start_frame, end_frame, stiffness, h, segment_loads, roll_free, grad, band, end_clamped=True, springs=None
+):
     """Elastic + segment energy of the rod, its gradient and its banded Hessian.
 
     frames: (N,3,3).  start_frame, end_frame: (3,3) fitting frames.  stiffness: (3,) N*mm^2.
     h: segment length, mm.  segment_loads: (N,3) vectors w_i in N*mm (see module doc).
     roll_free: when True one extra unknown, the roll of the end frame about its tangent, is
     appended after the 3N segment rotations.  end_clamped: False for a free tip (no end joint).
+    springs: stiffener springs between the segments (mechanics/stiffeners.py), None for none.
     grad: (n,) output, band: (n, BANDWIDTH+1) output (lower band, band[i, k] = H[i, i-k]);
     both are overwritten.  Returns (elastic_energy, segment_energy) in N*mm.
     """
@@ -224,10 +242,14 @@ def assemble(frames, start_frame, end_frame, stiffness, h, segment_loads, roll_f
     haa = np.empty((3, 3))
     hab = np.empty((3, 3))
     energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab, scratch)
+    if springs is not None:
+        energy += spring_terms_into(start_frame, frames[0], springs, HALF, g, haa, hab)
     grad[0:3] -= g
     _add_diag_block(band, 0, haa)
     for i in range(n_seg - 1):
         energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab, scratch)
+        if springs is not None:
+            energy += spring_terms_into(frames[i], frames[i + 1], springs, FULL, g, haa, hab)
         for x in range(3):
             grad[3 * i + x] += g[x]
             grad[3 * i + 3 + x] -= g[x]
@@ -237,6 +259,8 @@ def assemble(frames, start_frame, end_frame, stiffness, h, segment_loads, roll_f
     last = 3 * (n_seg - 1)
     if end_clamped:
         energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab, scratch)
+        if springs is not None:
+            energy += spring_terms_into(frames[n_seg - 1], end_frame, springs, HALF, g, haa, hab)
         for x in range(3):
             grad[last + x] += g[x]
         _add_diag_block(band, last, haa)
@@ -266,12 +290,13 @@ def assemble(frames, start_frame, end_frame, stiffness, h, segment_loads, roll_f
 
 
 @njit(cache=True)
-def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True):
+def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None):
     """Internal moment (world, N*mm) and discrete Darboux vector (material, 1/mm) at the N+1 nodes.
 
     The moment at node j is dE_joint/d(delta_B): the moment exerted by the part of the
-    hose beyond the node on the part before it.  The Darboux vector components are
-    (bending about d1, bending about d2, twist rate).  A free tip carries no moment.
+    hose beyond the node on the part before it (springs included when given).  The Darboux
+    vector components are (bending about d1, bending about d2, twist rate).  A free tip
+    carries no moment.
     """
     n_seg = frames.shape[0]
     scratch = new_scratch()
@@ -282,12 +307,14 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
     darboux = np.zeros((n_seg + 1, 3))
     for j in range(n_seg + 1 if end_clamped else n_seg):
         if j == 0:
-            fa, fb, length = start_frame, frames[0], 0.5 * h
+            fa, fb, length, kind = start_frame, frames[0], 0.5 * h, HALF
         elif j == n_seg:
-            fa, fb, length = frames[n_seg - 1], end_frame, 0.5 * h
+            fa, fb, length, kind = frames[n_seg - 1], end_frame, 0.5 * h, HALF
         else:
-            fa, fb, length = frames[j - 1], frames[j], h
+            fa, fb, length, kind = frames[j - 1], frames[j], h, FULL
         joint_terms_into(fa, fb, stiffness, length, g, haa, hab, scratch)
+        if springs is not None:
+            spring_terms_into(fa, fb, springs, kind, g, haa, hab)
         moments[j] = -g
         q = fa @ fb.T
         c = 1.0 + q[0, 0] + q[1, 1] + q[2, 2]

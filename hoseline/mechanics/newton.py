@@ -32,11 +32,16 @@ from hoseline.mechanics.rotations import rotate_frames, rotation_matrix
 
 @dataclass(frozen=True)
 class RodProperties:
-    """Internal-unit properties of the discrete rod: stiffness (EI1, EI2, GJ) N*mm^2, segment length h mm, count N."""
+    """Internal-unit properties of the discrete rod: stiffness (EI1, EI2, GJ) N*mm^2, segment length h mm, count N.
+
+    springs: the joint model.  None (default): the elastic joints of energy.py alone; else
+    the stiffener springs added at every joint, as packed by mechanics.stiffeners.spring_set.
+    """
 
     stiffness: np.ndarray
     segment_length: float
     segments: int
+    springs: tuple | None = None
 
     @property
     def length(self) -> float:
@@ -81,14 +86,16 @@ def end_frame_of(clamps: Clamps, state: RodState) -> np.ndarray:
 
 
 @njit(cache=True)
-def _system_kernel(frames, start_point, start_frame, end_point, end_frame, stiffness, h, force, line_weight, roll_free, end_clamped):
+def _system_kernel(
+    frames, start_point, start_frame, end_point, end_frame, stiffness, h, force, line_weight, roll_free, end_clamped, springs
+):
     """One pass over the rod: loads, energy, gradient, banded Hessian, constraint and its Jacobian."""
     n_seg = frames.shape[0]
     n = 3 * n_seg + (1 if roll_free else 0)
     grad = np.empty(n)
     band = np.empty((n, BANDWIDTH + 1))
     loads = segment_loads(frames, force, line_weight, h)
-    elastic, _ = assemble(frames, start_frame, end_frame, stiffness, h, loads, roll_free, grad, band, end_clamped)
+    elastic, _ = assemble(frames, start_frame, end_frame, stiffness, h, loads, roll_free, grad, band, end_clamped, springs)
     jac_t = np.zeros((n, 3))
     tip = start_point.copy()
     weight_potential = 0.0
@@ -127,6 +134,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
         clamps.line_weight,
         roll_free,
         clamps.end_clamped,
+        props.springs,
     )
     force = state.end_force if clamps.end_clamped else clamps.end_load
     residual = _residual(grad_max, gap, force, clamps.line_weight, props.largest_stiffness, props.length)
@@ -188,6 +196,7 @@ def solve_equilibrium(
         props.largest_stiffness,
         tolerance,
         max_iterations,
+        props.springs,
     )
     message = ("", "non-finite residual", "no acceptable step found", "iteration limit reached")[failure]
     new_state = RodState(frames, force if clamps.end_clamped else state.end_force, roll)
@@ -212,12 +221,12 @@ def _residual(grad_max, gap, force, line_weight, largest_stiffness, length):
 @njit(cache=True)
 def _state_system(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness,
+    roll_free, end_clamped, largest_stiffness, springs,
 ):
     """_system_kernel at a state with the end frame turned by `roll`, plus its relative residual."""
     energy, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
         frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
-        roll_free, end_clamped,
+        roll_free, end_clamped, springs,
     )
     residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, h * frames.shape[0])
     return energy, grad, band, jac_t, constraint, residual
@@ -226,7 +235,7 @@ def _state_system(
 @njit(cache=True)
 def _track_kernel(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations,
+    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs,
 ):
     """Plain Newton iterations with step halving, all in compiled code (see solve_equilibrium).
 
@@ -236,7 +245,7 @@ def _track_kernel(
     n_seg = frames.shape[0]
     _, grad, band, jac_t, constraint, residual = _state_system(
         frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-        roll_free, end_clamped, largest_stiffness,
+        roll_free, end_clamped, largest_stiffness, springs,
     )
     unstable = -1
     for iteration in range(max_iterations + 1):
@@ -255,7 +264,7 @@ def _track_kernel(
             trial_roll = roll + (alpha * step[3 * n_seg] if roll_free else 0.0)
             _, t_grad, t_band, t_jac_t, t_constraint, trial_residual = _state_system(
                 trial_frames, trial_force, trial_roll, start_point, start_frame, end_point, end_frame, stiffness, h,
-                line_weight, roll_free, end_clamped, largest_stiffness,
+                line_weight, roll_free, end_clamped, largest_stiffness, springs,
             )
             if trial_residual < (1.0 - 1e-4 * alpha) * residual or trial_residual <= tolerance:
                 accepted = True
@@ -271,7 +280,7 @@ def _track_kernel(
 @njit(cache=True)
 def _minimise_kernel(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations,
+    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs,
 ):
     """Levenberg-Marquardt / trust-region Newton that only accepts steps lowering the energy.
 
@@ -285,7 +294,7 @@ def _minimise_kernel(
     n_seg = frames.shape[0]
     energy, grad, band, jac_t, constraint, residual = _state_system(
         frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-        roll_free, end_clamped, largest_stiffness,
+        roll_free, end_clamped, largest_stiffness, springs,
     )
     diag_scale = 0.0
     for i in range(band.shape[0]):
@@ -316,7 +325,7 @@ def _minimise_kernel(
             trial_roll = roll + (step[3 * n_seg] if roll_free else 0.0)
             t_energy, t_grad, t_band, t_jac_t, t_constraint, trial_residual = _state_system(
                 trial_frames, trial_force, trial_roll, start_point, start_frame, end_point, end_frame, stiffness, h,
-                line_weight, roll_free, end_clamped, largest_stiffness,
+                line_weight, roll_free, end_clamped, largest_stiffness, springs,
             )
             if plain_newton:
                 # close to a stable minimum: plain Newton, judged by the residual

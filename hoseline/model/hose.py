@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hoseline.model.stiffeners import Stiffeners
+
 DEFAULT_SEGMENTS = 100
 MIN_SEGMENTS = 4
 DEFAULT_POISSON_RATIO = 0.5
@@ -51,6 +53,8 @@ class Hose:
     min_bend_radius: mm, catalogue minimum, measured to the inside of the bend; None if unknown.
     segments: number of rigid segments of the discrete rod (>= 4).
     bending_stiffness_2: EI in N*mm^2 about the second axis (d2); None means equal to bending_stiffness.
+    stiffeners: the thesis' off-axis springs between adjacent segments (model/stiffeners.py),
+        added to the elastic joints; None (default) for the plain rod.
     """
 
     length: float
@@ -61,6 +65,7 @@ class Hose:
     min_bend_radius: float | None = None
     segments: int = DEFAULT_SEGMENTS
     bending_stiffness_2: float | None = None
+    stiffeners: Stiffeners | None = None
 
     def __post_init__(self) -> None:
         for name in ("length", "outer_diameter", "bending_stiffness", "torsional_stiffness"):
@@ -77,6 +82,8 @@ class Hose:
             raise ValueError(f"hose.min_bend_radius = {self.min_bend_radius!r}: must be zero or positive (mm)")
         if int(self.segments) != self.segments or self.segments < MIN_SEGMENTS:
             raise ValueError(f"hose.segments = {self.segments!r}: must be a whole number >= {MIN_SEGMENTS}")
+        if self.stiffeners is not None and not isinstance(self.stiffeners, Stiffeners):
+            raise ValueError(f"hose.stiffeners = {self.stiffeners!r}: must be a Stiffeners or None")
 
     @property
     def outer_radius(self) -> float:

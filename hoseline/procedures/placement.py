@@ -20,12 +20,15 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
 from hoseline.mechanics.newton import RodProperties, end_frame_of, node_positions, solve_equilibrium, total_energy
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rotation_matrix, rotation_vector
+from hoseline.mechanics.stiffeners import spring_set
+from hoseline.model.hose import Hose
 from hoseline.model.problem import Problem
 from hoseline.procedures.continuation import (
     ContinuationLog,
@@ -36,6 +39,7 @@ from hoseline.procedures.continuation import (
     relax_to_stable,
 )
 from hoseline.procedures.result import Result
+from hoseline.procedures.stiffening import phase_in_springs
 from hoseline.procedures.stations import build_result
 from hoseline.procedures.symmetry import equivalent_states
 
@@ -43,9 +47,24 @@ __all__ = ["solve", "PlacementError", "rod_properties"]
 
 
 def rod_properties(problem: Problem) -> RodProperties:
-    """Internal-unit rod properties of the problem's hose."""
+    """Internal-unit rod properties of the problem's hose (with its stiffener springs, if any)."""
     hose = problem.hose
-    return RodProperties(hose.stiffness_vector, hose.segment_length, int(hose.segments))
+    return RodProperties(hose.stiffness_vector, hose.segment_length, int(hose.segments), stiffener_springs(hose))
+
+
+def stiffener_springs(hose: Hose) -> tuple | None:
+    """The hose's stiffener springs packed for the kernels, or None for the plain rod.
+
+    Inside the hose a spring spans a segment; at each fitting it spans half of one (the
+    joint there is h/2 long), anchored at the same points round the axis.
+    """
+    stiffeners = hose.stiffeners
+    if stiffeners is None:
+        return None
+    h = hose.segment_length
+    full = stiffeners.anchors(hose.outer_radius, h, h)
+    half = stiffeners.anchors(hose.outer_radius, h, 0.5 * h)
+    return spring_set(full, half, stiffeners.table.deformation, stiffeners.table.force)
 
 
 def weight_vector(problem: Problem) -> np.ndarray:
@@ -105,8 +124,11 @@ def solve(
         )
 
     first = control.first
-    state = _initial_buckle(props, place_path, first, axis, log)
-    state = follow("place", place_path, props, state, log, start=first, control=control, progress=progress)
+    place_props = replace(props, springs=None)  # stiffener springs come in once placed (stiffening.py)
+    state = _initial_buckle(place_props, place_path, first, axis, log)
+    state = follow("place", place_path, place_props, state, log, start=first, control=control, progress=progress)
+    if props.springs is not None:
+        state = phase_in_springs(props, place_path(1.0), state, log, progress)
 
     locked_frame = end_frame_of(place_path(1.0), state)
     lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))

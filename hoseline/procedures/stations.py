@@ -37,7 +37,9 @@ def build_result(
     n_seg = props.segments
     s = h * np.arange(n_seg + 1)
     nodes = centerline(state.frames, clamps.start_point, h)
-    moments, darboux = joint_moments(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h)
+    moments, darboux = joint_moments(
+        state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs
+    )
     tangents = np.vstack([clamps.start_frame[2], state.frames[:, 2], clamps.end_frame[2]])
     node_tangent = tangents[:-1] + tangents[1:]
     node_tangent /= np.linalg.norm(node_tangent, axis=1)[:, None]
@@ -77,7 +79,9 @@ def build_result(
         start_moment=-moments[0],
         end_force=state.end_force.copy(),
         end_moment=moments[-1].copy(),
-        elastic_energy=float(elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h)),
+        elastic_energy=float(
+            elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs)
+        ),
         gravity_energy=gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h),
         stability_margin=margin,
         lock_angle_deg=lock_angle_deg,

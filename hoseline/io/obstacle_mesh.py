@@ -1,0 +1,96 @@
+"""Read obstacle meshes (STL, OBJ, PLY, ...; STEP through OpenCASCADE) and write meshes as STL.
+
+Meshes are read with trimesh; STEP files are read and tessellated by OpenCASCADE (the OCP
+bindings) to within STEP_DEFLECTION.  Coordinates are taken as mm, in the same axes as the
+problem file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from hoseline.io.atomic import write_bytes
+
+STEP_SUFFIXES = (".step", ".stp")
+STEP_DEFLECTION = 0.1  # mm, largest distance between a STEP surface and its triangles
+STEP_ANGLE = 0.3  # rad, largest angle between neighbouring facet normals of a curved STEP face
+
+
+class ObstacleFileError(ValueError):
+    """A mesh file that cannot be read as triangles; the message names the file and the fix."""
+
+
+def read_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) mm and triangles (F, 3) of the mesh file at `path` (all its parts merged).
+
+    Raises ObstacleFileError for content that is not a triangle mesh, OSError if unreadable.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(2, "no such file", str(path))
+    if path.suffix.lower() in STEP_SUFFIXES:
+        return _read_step(path)
+    try:
+        mesh = trimesh.load(path, force="mesh")
+    except Exception as exc:  # trimesh raises many kinds for a foreign or broken file
+        raise ObstacleFileError(
+            f"{path}: cannot be read as a mesh ({type(exc).__name__}: {exc}); use STL, OBJ, PLY or STEP"
+        ) from None
+    faces = np.asarray(getattr(mesh, "faces", np.empty((0, 3))), dtype=np.int64)
+    if faces.ndim != 2 or faces.shape[0] == 0:
+        raise ObstacleFileError(f"{path}: holds no triangles; export the part as a surface mesh (STL, OBJ, PLY)")
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    if not np.all(np.isfinite(vertices)):
+        raise ObstacleFileError(f"{path}: has vertices that are not finite numbers")
+    return vertices, faces
+
+
+def _read_step(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and triangles of every face of a STEP file, tessellated by OpenCASCADE."""
+    from OCP.BRep import BRep_Tool  # OpenCASCADE takes about a second to load: only for STEP files
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.IFSelect import IFSelect_ReturnStatus
+    from OCP.STEPControl import STEPControl_Reader
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS
+
+    from hoseline.io.occt import quiet
+
+    quiet()
+    reader = STEPControl_Reader()
+    if reader.ReadFile(str(path)) != IFSelect_ReturnStatus.IFSelect_RetDone or reader.TransferRoots() == 0:
+        raise ObstacleFileError(f"{path}: OpenCASCADE cannot read it as STEP; export the part again as STEP AP203/214 or STL")
+    shape = reader.OneShape()
+    BRepMesh_IncrementalMesh(shape, STEP_DEFLECTION, False, STEP_ANGLE, True)
+    vertices, faces = [], []
+    explorer = TopExp_Explorer(shape, TopAbs_FACE)
+    while explorer.More():
+        face = TopoDS.Face(explorer.Current())
+        location = TopLoc_Location()
+        triangulation = BRep_Tool.Triangulation_s(face, location)
+        if triangulation is not None:
+            move = location.Transformation()
+            first = len(vertices)
+            for i in range(1, triangulation.NbNodes() + 1):
+                point = triangulation.Node(i).Transformed(move)
+                vertices.append((point.X(), point.Y(), point.Z()))
+            reversed_face = face.Orientation() == TopAbs_REVERSED
+            for i in range(1, triangulation.NbTriangles() + 1):
+                a, b, c = triangulation.Triangle(i).Get()
+                faces.append((first + a - 1, first + c - 1, first + b - 1) if reversed_face else
+                             (first + a - 1, first + b - 1, first + c - 1))
+        explorer.Next()
+    if not faces:
+        raise ObstacleFileError(f"{path}: the STEP file has no faces to tessellate (only curves or points?)")
+    return np.array(vertices, dtype=float), np.array(faces, dtype=np.int64)
+
+
+def write_stl(path: str | Path, vertices: np.ndarray, faces: np.ndarray) -> Path:
+    """Write a binary STL (mm) atomically."""
+    data = trimesh.Trimesh(vertices=vertices, faces=faces, process=False).export(file_type="stl")
+    return write_bytes(path, data)

@@ -1,0 +1,157 @@
+"""Read point clouds of a scanned hose surface: PLY, XYZ/CSV/TXT and the vertices of STL.
+
+Points are taken as they are, in mm, in the coordinate system of the mounts (the
+scanner's reference markers put them there).  Messages for bad files name the file, the
+line (or the element) and the fix.  write_ply writes a cloud (binary PLY) atomically.
+"""
+
+from __future__ import annotations
+
+import re
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from hoseline.io.atomic import write_bytes
+
+FORMATS = {".ply": "PLY", ".xyz": "text", ".csv": "text", ".txt": "text", ".asc": "text", ".pts": "text", ".stl": "STL"}
+PLY_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2", "ushort": "u2",
+    "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4",
+    "double": "f8", "float64": "f8",
+}
+MIN_POINTS = 20
+
+
+class ScanFileError(ValueError):
+    """A scan file that cannot be read as a point cloud; the message names the place and the fix."""
+
+
+def read_scan(path: str | Path, min_points: int = MIN_POINTS) -> np.ndarray:
+    """Points (n, 3) in mm from a PLY, XYZ/CSV/TXT or STL file (format by the file's extension).
+
+    min_points: fewer points are refused (1 for a file of reference points).
+    Non-finite points are refused; duplicate STL vertices are merged.
+    Raises ScanFileError for content that is not a point cloud, OSError when unreadable.
+    """
+    path = Path(path)
+    kind = FORMATS.get(path.suffix.lower())
+    if kind is None:
+        raise ScanFileError(
+            f"{path}: unknown scan format '{path.suffix}': use .ply, .stl or a text file (.xyz, .csv, .txt, .asc, .pts)"
+        )
+    data = path.read_bytes()
+    reader = {"PLY": _read_ply, "STL": _read_stl, "text": _read_text}[kind]
+    points = reader(data, str(path))
+    if points.shape[0] < min_points:
+        raise ScanFileError(f"{path}: only {points.shape[0]} points; at least {min_points} are needed")
+    bad = np.flatnonzero(~np.all(np.isfinite(points), axis=1))
+    if bad.size:
+        raise ScanFileError(f"{path}: point {bad[0]} is not finite ({points[bad[0]].tolist()}); remove it from the scan")
+    return points
+
+
+def write_ply(path: str | Path, points: np.ndarray) -> Path:
+    """Write points (n, 3), mm, as a binary little-endian PLY with float64 x, y, z (atomically)."""
+    points = np.ascontiguousarray(points, dtype="<f8")
+    header = (
+        "ply\nformat binary_little_endian 1.0\ncomment hoseline point cloud, mm\n"
+        f"element vertex {points.shape[0]}\nproperty double x\nproperty double y\nproperty double z\nend_header\n"
+    )
+    return write_bytes(path, header.encode("ascii") + points.tobytes())
+
+
+def _read_text(data: bytes, source: str) -> np.ndarray:
+    """x y z per line (spaces, tabs, commas or semicolons); one header line and # comments are skipped."""
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise ScanFileError(f"{source}: not a text file; save the points as UTF-8 text with x, y, z per line") from None
+    rows = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        fields = [f for f in re.split(r"[\s,;]+", line) if f]
+        try:
+            values = [float(f) for f in fields[:3]]
+        except ValueError:
+            if not rows and number <= 2:  # a header such as "x,y,z"
+                continue
+            raise ScanFileError(f"{source}, line {number}: '{line[:60]}' is not three numbers x y z (mm)") from None
+        if len(values) < 3:
+            raise ScanFileError(f"{source}, line {number}: '{line[:60]}' has {len(values)} numbers; give x y z (mm)")
+        rows.append(values)
+    return np.array(rows, dtype=float).reshape(-1, 3)
+
+
+def _read_ply(data: bytes, source: str) -> np.ndarray:
+    """The x, y, z properties of the vertex element (ascii, binary little or big endian)."""
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise ScanFileError(f"{source}: not a PLY file (it must start with 'ply' and have an 'end_header' line)")
+    body_start = data.index(b"\n", end) + 1
+    header = data[:end].decode("ascii", errors="replace").splitlines()
+    fmt, elements = None, []  # elements: [name, count, [(property, dtype or None for lists)]]
+    for number, line in enumerate(header, start=1):
+        words = line.split()
+        if not words or words[0] in ("comment", "obj_info", "ply"):
+            continue
+        if words[0] == "format":
+            fmt = words[1]
+        elif words[0] == "element":
+            elements.append([words[1], int(words[2]), []])
+        elif words[0] == "property" and elements:
+            if words[1] == "list":
+                elements[-1][2].append((words[-1], None))
+            elif words[1] in PLY_TYPES:
+                elements[-1][2].append((words[2], PLY_TYPES[words[1]]))
+            else:
+                raise ScanFileError(f"{source}, header line {number}: unknown property type '{words[1]}'")
+    if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
+        raise ScanFileError(f"{source}: PLY format '{fmt}' is not ascii, binary_little_endian or binary_big_endian")
+    if not elements or elements[0][0] != "vertex":
+        raise ScanFileError(f"{source}: the first PLY element must be 'vertex'; export the point cloud with vertices first")
+    _, count, properties = elements[0]
+    names = [name for name, _ in properties]
+    if not {"x", "y", "z"} <= set(names):
+        raise ScanFileError(f"{source}: the PLY vertices have no x, y, z properties (found {', '.join(names)})")
+    if any(dtype is None for _, dtype in properties):
+        raise ScanFileError(f"{source}: list properties on PLY vertices are not supported; export x, y, z only")
+    if fmt == "ascii":
+        lines = data[body_start:].decode("ascii", errors="replace").split("\n")[:count]
+        try:
+            table = np.array([[float(v) for v in line.split()[: len(names)]] for line in lines], dtype=float)
+        except ValueError:
+            raise ScanFileError(f"{source}: a PLY vertex line is not {len(names)} numbers") from None
+        if table.shape != (count, len(names)):
+            raise ScanFileError(f"{source}: the header announces {count} vertices of {len(names)} values; the file has fewer")
+        columns = {name: table[:, i] for i, name in enumerate(names)}
+    else:
+        order = "<" if fmt == "binary_little_endian" else ">"
+        dtype = np.dtype([(name, order + code) for name, code in properties])
+        if len(data) - body_start < dtype.itemsize * count:
+            raise ScanFileError(f"{source}: the header announces {count} vertices; the file is too short for them")
+        table = np.frombuffer(data, dtype=dtype, count=count, offset=body_start)
+        columns = {name: table[name].astype(float) for name in names}
+    return np.column_stack([columns["x"], columns["y"], columns["z"]])
+
+
+def _read_stl(data: bytes, source: str) -> np.ndarray:
+    """The distinct vertices of an ASCII or binary STL."""
+    if len(data) >= 84:
+        triangles = struct.unpack("<I", data[80:84])[0]
+        if len(data) == 84 + 50 * triangles:
+            record = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+            table = np.frombuffer(data, dtype=record, count=triangles, offset=84)
+            return np.unique(table["vertices"].reshape(-1, 3).astype(float), axis=0)
+    text = data.decode("ascii", errors="replace")
+    if not text.lstrip().startswith("solid"):
+        raise ScanFileError(f"{source}: neither a binary STL (size does not match its triangle count) nor an ASCII STL")
+    found = re.findall(r"vertex\s+(\S+)\s+(\S+)\s+(\S+)", text)
+    try:
+        vertices = np.array(found, dtype=float).reshape(-1, 3)
+    except ValueError:
+        raise ScanFileError(f"{source}: an STL 'vertex' line does not hold three numbers") from None
+    return np.unique(vertices, axis=0)

@@ -1,0 +1,281 @@
+"""Read sweep files: a problem file (TOML) with the motion of the mounts and the surroundings.
+
+The hose, the mounts at design position and the environment are those of a problem file
+(read by problem_file.py; see README).  A sweep file adds::
+
+    [start]
+    body = "chassis"            # optional: the body the fitting moves with (default: fixed)
+    [end]
+    body = "knuckle"
+
+    [[bodies]]                  # one per moving body
+    name = "knuckle"
+    poses = "knuckle.csv"       # a pose table (see pose_table.py), relative to this file, or:
+    stages = [                  # generated motion, stage after stage
+      { name = "steer", rotate = [0.0, 30.0], axis = [0, 0, 1], point = [-185, -7, 0], steps = 30 },
+      { name = "steer", rotate = [30.0, 0.0], axis = [0, 0, 1], point = [-185, -7, 0], steps = 30 },
+      { name = "jounce", translate = [0.0, 50.0], axis = [0, 0, 1], steps = 25 },
+    ]
+
+    [[obstacles]]
+    name = "strut"              # optional, default: the file name without extension
+    file = "strut.stl"          # STL, OBJ, PLY or STEP, relative to this file, mm
+    clearance = 25.4            # mm, optional (default one inch)
+    body = "knuckle"            # optional: moves with this body (default: fixed)
+
+    [sweep]
+    compare_free_roll = true    # optional: also sweep with the end fitting free to spin
+
+rotate: [from, to] degrees about `axis` through `point` (mm); translate: [from, to] mm
+along `axis`; steps: intervals of the stage (default 20).  Axes and points are in world
+coordinates at design position.  A stage's name is a joint coordinate, starting at 0;
+stages of the same name move the same coordinate (see model/motion.generated_motion).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import typing
+from pathlib import Path
+from typing import Annotated
+
+import tomllib
+
+import pydantic
+from pydantic import AfterValidator, Field, model_validator
+
+from hoseline.io import problem_file
+from hoseline.io.obstacle_mesh import ObstacleFileError, read_mesh
+from hoseline.io.pose_table import PoseTableError, read_pose_table
+from hoseline.io.problem_file import Direction, ProblemFileError, Vector, _Section, problem_from_dict
+from hoseline.model.motion import BodyMotion, Rotation, Translation, generated_motion
+from hoseline.model.sweep import DEFAULT_CLEARANCE, Obstacle, SweepProblem
+
+SWEEP_TABLES = ("bodies", "obstacles", "sweep")
+
+
+class SweepFileError(ProblemFileError):
+    """A sweep file that cannot describe a sweep; the message names the field, the value and the fix."""
+
+
+def _range(value: list[float]) -> list[float]:
+    if len(value) != 2 or not all(math.isfinite(v) for v in value):
+        raise ValueError("must be [from, to], two finite numbers")
+    return value
+
+
+def _at_least_one(value: int) -> int:
+    if value < 1:
+        raise ValueError("must be at least 1")
+    return value
+
+
+def _not_negative(value: float) -> float:
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ValueError("must be zero or positive (mm)")
+    return value
+
+
+Range = Annotated[list[float], AfterValidator(_range)]
+
+
+class StageSection(_Section):
+    """A generated stage of a body's motion: a rotation or a translation."""
+
+    name: str | None = None
+    rotate: Range | None = None
+    translate: Range | None = None
+    axis: Direction
+    point: Vector | None = None
+    steps: Annotated[int, AfterValidator(_at_least_one)] = 20
+
+    @model_validator(mode="after")
+    def _one_motion(self) -> "StageSection":
+        if (self.rotate is None) == (self.translate is None):
+            raise ValueError("a stage needs exactly one of rotate = [from, to] (degrees) or translate = [from, to] (mm)")
+        if self.rotate is not None and self.point is None:
+            raise ValueError("a rotate stage needs point = [x, y, z] (mm), a point on its axis")
+        if self.translate is not None and self.point is not None:
+            raise ValueError("a translate stage takes no point: remove it (the axis is a direction)")
+        return self
+
+    def generator(self) -> Rotation | Translation:
+        if self.rotate is not None:
+            return Rotation(self.axis, self.point, tuple(self.rotate), self.steps, self.name or "rotation")
+        return Translation(self.axis, tuple(self.translate), self.steps, self.name or "translation")
+
+
+class BodySection(_Section):
+    """[[bodies]]: a moving body, by a pose table or by generated stages."""
+
+    name: str
+    poses: str | None = None
+    stages: list[StageSection] | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> "BodySection":
+        if (self.poses is None) == (self.stages is None):
+            raise ValueError(
+                f"body {self.name!r} needs exactly one of poses = \"table.csv\" (a pose table) or stages = [...] "
+                "(rotate / translate stages)"
+            )
+        if self.stages is not None and not self.stages:
+            raise ValueError(f"body {self.name!r}: stages is empty; give at least one rotate or translate stage")
+        return self
+
+
+class ObstacleSection(_Section):
+    """[[obstacles]]: a mesh file, its required clearance, the body it moves with."""
+
+    name: str | None = None
+    file: str
+    clearance: Annotated[float, AfterValidator(_not_negative)] = DEFAULT_CLEARANCE
+    body: str | None = None
+
+
+class SweepSection(_Section):
+    """[sweep]: options of the sweep."""
+
+    compare_free_roll: bool = True
+
+
+class SweepTables(_Section):
+    """The tables a sweep file adds to a problem file."""
+
+    bodies: list[BodySection]
+    obstacles: list[ObstacleSection] = Field(default_factory=list)
+    sweep: SweepSection = Field(default_factory=SweepSection)
+    start_body: str | None = None
+    end_body: str | None = None
+
+
+def load_sweep(path: str | Path) -> SweepProblem:
+    """Read a sweep file, its pose tables and obstacle meshes (paths relative to the file).
+
+    Raises SweepFileError naming the field, the value and the fix (or the line of a pose
+    table), and OSError when the sweep file itself cannot be read.
+    """
+    path = Path(path)
+    with path.open("rb") as stream:
+        try:
+            data = tomllib.load(stream)
+        except tomllib.TOMLDecodeError as exc:
+            raise SweepFileError(f"{path}: not valid TOML: {exc}") from None
+        except UnicodeDecodeError:
+            raise SweepFileError(f"{path}: not UTF-8 text: save the sweep file as UTF-8") from None
+    data.setdefault("name", path.stem)
+    return sweep_from_dict(data, source=str(path), base_dir=path.parent)
+
+
+def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> SweepProblem:
+    """Validate a parsed sweep file and build the SweepProblem (files relative to base_dir)."""
+    base = Path.cwd() if base_dir is None else Path(base_dir)
+    problem_part = {key: value for key, value in data.items() if key not in SWEEP_TABLES}
+    sweep_part = {key: data[key] for key in SWEEP_TABLES if key in data}
+    for role in ("start", "end"):
+        table = problem_part.get(role)
+        if isinstance(table, dict) and "body" in table:
+            rest = {key: value for key, value in table.items() if key != "body"}
+            if rest:
+                problem_part[role] = rest
+            else:  # only the body: the mount itself comes from elsewhere (e.g. [mounts] iges)
+                del problem_part[role]
+            sweep_part[f"{role}_body"] = table["body"]
+    if "bodies" not in sweep_part:
+        raise SweepFileError(
+            f"{source}: missing [[bodies]]: a sweep needs at least one moving body, with poses = \"table.csv\" "
+            "or stages = [...]; and [start] or [end] body = its name"
+        )
+    try:
+        problem = problem_from_dict(problem_part, source=source, base_dir=base)
+    except SweepFileError:
+        raise
+    except ProblemFileError as exc:
+        raise SweepFileError(str(exc)) from None
+    tables = _validated(sweep_part, source)
+    motions = tuple(_motion(body, base, source) for body in tables.bodies)
+    obstacles = tuple(_obstacle(item, base, source) for item in tables.obstacles)
+    try:
+        return SweepProblem(
+            problem=problem,
+            start_body=tables.start_body,
+            end_body=tables.end_body,
+            motions=motions,
+            obstacles=obstacles,
+            compare_free_roll=tables.sweep.compare_free_roll,
+        )
+    except ValueError as exc:
+        raise SweepFileError(f"{source}: {exc}") from None
+
+
+def _motion(body: BodySection, base: Path, source: str) -> BodyMotion:
+    """The motion of one [[bodies]] entry."""
+    if body.stages is not None:
+        try:
+            return generated_motion(body.name, [stage.generator() for stage in body.stages])
+        except ValueError as exc:
+            raise SweepFileError(f"{source}: body {body.name!r}: {exc}") from None
+    try:
+        return read_pose_table(base / body.poses, body.name)
+    except PoseTableError as exc:
+        raise SweepFileError(f"{source}: body {body.name!r}: {exc}") from None
+    except OSError as exc:
+        raise SweepFileError(
+            f"{source}: body {body.name!r}: poses = \"{body.poses}\": cannot read {base / body.poses}: {exc.strerror or exc}"
+        ) from None
+
+
+def _obstacle(item: ObstacleSection, base: Path, source: str) -> Obstacle:
+    """The Obstacle of one [[obstacles]] entry, its mesh read."""
+    file = base / item.file
+    name = item.name or Path(item.file).stem
+    try:
+        vertices, faces = read_mesh(file)
+    except ObstacleFileError as exc:
+        raise SweepFileError(f"{source}: obstacle {name!r}: {exc}") from None
+    except OSError as exc:
+        raise SweepFileError(f"{source}: obstacle {name!r}: file = \"{item.file}\": cannot read {file}: {exc.strerror or exc}") from None
+    return Obstacle(name, vertices, faces, item.clearance, item.body, source=str(item.file))
+
+
+def _validated(data: dict, source: str) -> SweepTables:
+    """The sweep tables validated, or SweepFileError with the first problem in problem_file's words."""
+    try:
+        return SweepTables.model_validate(data)
+    except pydantic.ValidationError as exc:
+        errors = sorted(exc.errors(), key=lambda error: error["type"] != "extra_forbidden")
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        error = errors[0]
+        loc = tuple(error["loc"])
+        if loc and loc[0] in ("start_body", "end_body"):  # written as [start] body, [end] body
+            loc = (loc[0].split("_")[0], "body") + loc[1:]
+            error = {**error, "loc": loc}
+        if error["type"] == "extra_forbidden":
+            message = _unknown_key(loc)
+        else:
+            message = problem_file._message(error)
+        raise SweepFileError(f"{source}: {message}{more}") from None
+
+
+def _unknown_key(loc: tuple) -> str:
+    """Name an unknown key of the sweep tables and suggest the nearest known one."""
+    model = SweepTables
+    for part in loc[:-1]:
+        if isinstance(part, str):  # list positions (int) stay in the same model
+            model = _inner_model(model.model_fields[part].annotation)
+    known = [name for name in model.model_fields if not name.endswith("_body")]
+    close = difflib.get_close_matches(str(loc[-1]), known, n=1, cutoff=0.6)
+    hint = f"did you mean '{close[0]}'?" if close else "allowed keys: " + ", ".join(known)
+    return f"unknown key '{problem_file._path(loc)}': {hint}"
+
+
+def _inner_model(annotation) -> type[pydantic.BaseModel] | None:
+    """The model class in an annotation such as Model, list[Model] or Model | None."""
+    if isinstance(annotation, type) and issubclass(annotation, pydantic.BaseModel):
+        return annotation
+    for argument in typing.get_args(annotation):
+        found = _inner_model(argument)
+        if found is not None:
+            return found
+    return None

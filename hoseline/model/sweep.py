@@ -1,0 +1,88 @@
+"""A sweep: the placed hose carried through the motion of the bodies its mounts sit on, among obstacles."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hoseline.model.motion import BodyMotion, Pose, Stage
+from hoseline.model.problem import Problem
+
+DEFAULT_CLEARANCE = 25.4  # mm, one inch: the usual requirement
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """Surroundings the hose must keep clear of: a triangle mesh, fixed or moving with a body.
+
+    name: for reports.  vertices: (V, 3) mm at design position.  faces: (F, 3) vertex indices.
+    clearance: mm, the required distance from the hose surface.  body: name of the body it
+    moves with, or None for fixed surroundings.  source: where the mesh came from (a file name).
+    """
+
+    name: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    clearance: float = DEFAULT_CLEARANCE
+    body: str | None = None
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.clearance) and self.clearance >= 0.0):
+            raise ValueError(f"obstacle '{self.name}': clearance = {self.clearance!r} must be zero or positive (mm)")
+        if len(self.faces) == 0:
+            raise ValueError(f"obstacle '{self.name}': the mesh has no triangles")
+
+
+@dataclass(frozen=True)
+class SweepProblem:
+    """Everything a sweep needs.
+
+    problem: the hose and its mounts at design position (the twist is locked at assembly).
+    start_body, end_body: names of the bodies the mounts move with, or None for fixed.
+    motions: the moving bodies, all with the same number of poses.
+    obstacles: the surroundings.
+    compare_free_roll: also sweep with the end fitting free to spin about its axis (the
+        common modelling error) and report how far that answer is from the right one.
+    """
+
+    problem: Problem
+    start_body: str | None
+    end_body: str | None
+    motions: tuple[BodyMotion, ...]
+    obstacles: tuple[Obstacle, ...] = ()
+    compare_free_roll: bool = True
+
+    def __post_init__(self) -> None:
+        if not self.motions:
+            raise ValueError("a sweep needs at least one moving body")
+        names = [m.name for m in self.motions]
+        counts = {m.name: len(m.poses) for m in self.motions}
+        if len(set(counts.values())) != 1:
+            raise ValueError(f"all moving bodies need the same number of poses, got {counts}")
+        for role, body in (("start.body", self.start_body), ("end.body", self.end_body)):
+            if body is not None and body not in names:
+                raise ValueError(f"{role} = {body!r}: no such body; bodies: {', '.join(names)}")
+        for obstacle in self.obstacles:
+            if obstacle.body is not None and obstacle.body not in names:
+                raise ValueError(f"obstacle '{obstacle.name}': body = {obstacle.body!r}: no such body")
+
+    @property
+    def pose_count(self) -> int:
+        return len(self.motions[0].poses)
+
+    @property
+    def travel(self) -> np.ndarray:
+        """(M,) travel of each pose, in its stage's unit (from the first moving body)."""
+        return self.motions[0].travel
+
+    @property
+    def stages(self) -> tuple[Stage, ...]:
+        return self.motions[0].stages
+
+    def pose(self, body: str | None, index: int) -> Pose:
+        """Pose of `body` at sweep pose `index` (the design position for None)."""
+        if body is None:
+            return Pose()
+        return next(m for m in self.motions if m.name == body).poses[index]

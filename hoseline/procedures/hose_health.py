@@ -1,0 +1,58 @@
+"""What an engineer checks on a placed hose at one pose: bend radius, twisting moment, reactions.
+
+The same quantities as the full Result (see stations.py), computed without the stability
+analysis, so a sweep can afford them at every pose.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hoseline.mechanics.energy import joint_moments
+from hoseline.mechanics.newton import RodProperties, end_frame_of
+from hoseline.mechanics.rod import Clamps, RodState
+
+
+@dataclass(frozen=True)
+class Health:
+    """Loads and bending along the hose at one pose.
+
+    bend_radius: (N+1,) mm at the stations, to the inside of the bend (inf where straight).
+    twisting_moment: (N+1,) N*mm, the internal moment's component along the tangent.
+    start_force, end_force: (3,) N, reactions of the mounts on the hose.
+    start_moment, end_moment: (3,) N*mm, the same, about the fitting tips.
+    """
+
+    bend_radius: np.ndarray
+    twisting_moment: np.ndarray
+    start_force: np.ndarray
+    start_moment: np.ndarray
+    end_force: np.ndarray
+    end_moment: np.ndarray
+
+
+def hose_health(props: RodProperties, clamps: Clamps, state: RodState, outer_radius: float) -> Health:
+    """Bend radius, twisting moment and mount reactions of an equilibrium `state` under `clamps`.
+
+    outer_radius: mm, for the bend radius to the inside of the bend.
+    """
+    h = props.segment_length
+    end_frame = end_frame_of(clamps, state)
+    moments, darboux = joint_moments(state.frames, clamps.start_frame, end_frame, props.stiffness, h)
+    tangents = np.vstack([clamps.start_frame[2][None], state.frames[:, 2], end_frame[2][None]])
+    node_tangent = tangents[:-1] + tangents[1:]
+    node_tangent /= np.linalg.norm(node_tangent, axis=1)[:, None]
+    curvature = np.hypot(darboux[:, 0], darboux[:, 1])
+    with np.errstate(divide="ignore"):
+        bend_radius = 1.0 / curvature - outer_radius
+    start_force = -(state.end_force + props.length * clamps.line_weight)
+    return Health(
+        bend_radius=bend_radius,
+        twisting_moment=np.einsum("ij,ij->i", moments, node_tangent),
+        start_force=start_force,
+        start_moment=-moments[0],
+        end_force=state.end_force.copy(),
+        end_moment=moments[-1].copy(),
+    )

@@ -1,0 +1,267 @@
+"""Quasi-static sweep: the placed hose carried through the motion of the bodies its mounts sit on.
+
+1. The hose is placed at design position (placement.solve): the twist is locked at assembly.
+2. Both fittings then move with their bodies, clamped throughout: a body pose (R, p) takes
+   a fitting tip P to R P + p and its frame F to F R^T.
+3. Each pose starts from the previous equilibrium.  A secant predictor and one Newton
+   solve usually reach it in two or three iterations.  When that fails, ends on an
+   unstable equilibrium, or moves the hose much more than the mounts moved, the step is
+   followed instead by continuation (continuation.follow) along the interpolated body
+   poses (slerp of the rotations), with sub-steps, stability monitoring and branch
+   switching; a loss of stability there is a snap-through, recorded with its jump.
+4. At every pose: bend radius, twisting moment and reactions, and the nearest approach to
+   every obstacle (exact, clearance.py).
+5. Optionally the same sweep with the end fitting free to spin (the common modelling error
+   the seed paper warns about), and the separation of the two answers.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from hoseline.mechanics.newton import node_positions, solve_equilibrium
+from hoseline.mechanics.rod import Clamps, RodState
+from hoseline.mechanics.rotations import extrapolate_frames
+from hoseline.model.motion import Pose, interpolate
+from hoseline.model.mounts import Mount, single_plane_offset
+from hoseline.model.sweep import SweepProblem
+from hoseline.procedures.clearance import TriangleIndex
+from hoseline.procedures.continuation import ContinuationLog, Progress, StepControl, follow
+from hoseline.procedures.hose_health import hose_health
+from hoseline.procedures.placement import rod_properties, solve, weight_vector
+from hoseline.procedures.result import Result
+from hoseline.procedures.sweep_result import ObstacleClearance, Snap, SweepResult
+
+JUMP_FACTOR = 3.0  # a step moving a station more than this times the mounts' movement is followed in sub-steps
+CAREFUL = StepControl(first=0.1, largest=0.1)  # sub-steps of a suspicious step
+PLAIN = StepControl(first=1.0, largest=1.0)  # one step, halved as needed
+
+
+@dataclass
+class _Reached:
+    """One pose reached: the state, its clamps, the Newton iterations and what was logged."""
+
+    state: RodState
+    clamps: Clamps
+    iterations: int
+    events: list[str]
+    jump: float
+
+
+class _Tracker:
+    """Carries one equilibrium of the hose from pose to pose.
+
+    assembly: the placement at design position.  roll_free: the end fitting may spin about
+    its axis (the comparison run).
+    """
+
+    def __init__(self, sweep: SweepProblem, assembly: Result, roll_free: bool) -> None:
+        self.sweep = sweep
+        self.props = rod_properties(sweep.problem)
+        self.weight = weight_vector(sweep.problem)
+        self.roll_free = roll_free
+        self.start_frame = assembly.start_frame
+        self.end_frame = assembly.end_frame
+        self.log = ContinuationLog()
+        self.poses = (Pose(), Pose())
+        self.state = RodState(assembly.frames.copy(), assembly.end_force.copy(), 0.0)
+        self.before: RodState | None = None  # the equilibrium one pose back, for the secant predictor
+
+    def clamps(self, start: Pose, end: Pose) -> Clamps:
+        """The clamps with the start body at `start` and the end body at `end`."""
+        problem = self.sweep.problem
+        return Clamps(
+            start_point=start.point(problem.start.point),
+            start_frame=start.frame(self.start_frame),
+            end_point=end.point(problem.end.point),
+            end_frame=end.frame(self.end_frame),
+            roll_free=self.roll_free,
+            line_weight=self.weight,
+        )
+
+    def move_to(self, index: int) -> _Reached:
+        """Reach the equilibrium at sweep pose `index` from the current one."""
+        sweep = self.sweep
+        target = (sweep.pose(sweep.start_body, index), sweep.pose(sweep.end_body, index))
+        clamps = self.clamps(*target)
+        old_nodes = node_positions(self.props, clamps, self.state)
+        limit = JUMP_FACTOR * self._mount_movement(target) + 1e-6 * self.props.length
+        guess = self.state if self.before is None else _secant(self.before, self.state)
+        trial, report = solve_equilibrium(self.props, clamps, guess)
+        iterations = report.iterations
+        events: list[str] = []
+        jump = _largest_movement(old_nodes, node_positions(self.props, clamps, trial)) if report.converged else math.inf
+        if not (report.converged and report.unstable_directions == 0 and jump <= limit):
+            start_poses = self.poses
+
+            def path(t: float) -> Clamps:
+                return self.clamps(interpolate(start_poses[0], target[0], t), interpolate(start_poses[1], target[1], t))
+
+            control = PLAIN if not report.converged else CAREFUL
+            logged, counted = len(self.log.events), self.log.iterations
+            trial = follow(f"step to pose {index}", path, self.props, self.state, self.log, control=control)
+            events = self.log.events[logged:]
+            iterations += self.log.iterations - counted
+            jump = _largest_movement(old_nodes, node_positions(self.props, clamps, trial))
+            self.before = None  # a new branch or a sharp turn: no secant across it
+        else:
+            self.before = self.state
+        self.state, self.poses = trial, target
+        return _Reached(trial, clamps, iterations, events, jump)
+
+    def _mount_movement(self, target: tuple[Pose, Pose]) -> float:
+        """A bound (mm) of how far a station moves if the hose moved rigidly with either mount."""
+        problem = self.sweep.problem
+        moves = []
+        for old, new, point in zip(self.poses, target, (problem.start.point, problem.end.point)):
+            moves.append(float(np.linalg.norm(new.point(point) - old.point(point))) + self.props.length * old.angle_to(new))
+        return max(moves)
+
+
+def _secant(before: RodState, current: RodState) -> RodState:
+    """The next equilibrium guessed by repeating the last step (poses about evenly spaced)."""
+    return RodState(
+        extrapolate_frames(before.frames, current.frames, 1.0),
+        2.0 * current.end_force - before.end_force,
+        2.0 * current.roll - before.roll,
+    )
+
+
+def _largest_movement(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest distance (mm) between corresponding stations of two shapes."""
+    return float(np.max(np.linalg.norm(a - b, axis=1)))
+
+
+def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None) -> SweepResult:
+    """Carry the hose of `sweep` through all its poses; measure clearance and health at each.
+
+    progress: optional callable(phase, fraction) for a progress bar.
+    Raises PlacementError (from the placement or the continuation) when a pose cannot be reached.
+    """
+    started = time.perf_counter()
+    problem = sweep.problem
+    assembly = solve(problem, progress=_prefixed(progress, "assembly"))
+    count = sweep.pose_count
+    n_nodes = problem.hose.segments + 1
+    tracker = _Tracker(sweep, assembly, roll_free=False)
+    indexes = [TriangleIndex(o.vertices, o.faces) for o in sweep.obstacles]
+
+    centerlines = np.empty((count, n_nodes, 3))
+    mounts = np.empty((4, count, 3))  # start point, end point, start direction, end direction
+    health = []
+    iterations = np.zeros(count, dtype=int)
+    near = [[] for _ in sweep.obstacles]
+    snaps: list[Snap] = []
+    events: list[str] = []
+    solve_time = clearance_time = 0.0
+    for k in range(count):
+        tick = time.perf_counter()
+        reached = tracker.move_to(k)
+        solve_time += time.perf_counter() - tick
+        nodes = node_positions(tracker.props, reached.clamps, reached.state)
+        centerlines[k] = nodes
+        mounts[:, k] = _mount_geometry(reached.clamps)
+        health.append(hose_health(tracker.props, reached.clamps, reached.state, problem.hose.outer_radius))
+        iterations[k] = reached.iterations
+        if reached.events:
+            events.extend(reached.events)
+            if k > 0:  # the step from the design position to the first pose is not part of the sweep
+                snaps.append(Snap(k, reached.jump, reached.events))
+        tick = time.perf_counter()
+        for obstacle, index, found in zip(sweep.obstacles, indexes, near):
+            found.append(_nearest(index, sweep.pose(obstacle.body, k), nodes, problem.hose.outer_radius))
+        clearance_time += time.perf_counter() - tick
+        if progress is not None:
+            progress("sweep", (k + 1) / count)
+
+    free_centerlines = separation = None
+    if sweep.compare_free_roll:
+        tick = time.perf_counter()
+        free_centerlines, free_events = _free_roll_sweep(sweep, assembly, progress)
+        events.extend(f"end free to spin: {event}" for event in free_events)
+        separation = np.max(np.linalg.norm(free_centerlines - centerlines, axis=2), axis=1)
+        solve_time += time.perf_counter() - tick
+
+    return SweepResult(
+        sweep=sweep,
+        assembly=assembly,
+        s=assembly.s,
+        centerlines=centerlines,
+        start_points=mounts[0],
+        end_points=mounts[1],
+        start_directions=mounts[2],
+        end_directions=mounts[3],
+        bend_radius=np.array([h.bend_radius for h in health]),
+        twisting_moment=np.array([h.twisting_moment for h in health]),
+        start_force=np.array([h.start_force for h in health]),
+        start_moment=np.array([h.start_moment for h in health]),
+        end_force=np.array([h.end_force for h in health]),
+        end_moment=np.array([h.end_moment for h in health]),
+        single_plane_offset=np.array([_single_plane(mounts[:, k]) for k in range(count)]),
+        clearances=[
+            ObstacleClearance(
+                obstacle=obstacle,
+                distance=np.array([p.distance for p in found]),
+                s=np.array([p.s for p in found]),
+                on_hose=np.array([p.on_hose for p in found]),
+                on_obstacle=np.array([p.on_obstacle for p in found]),
+            )
+            for obstacle, found in zip(sweep.obstacles, near)
+        ],
+        iterations=iterations,
+        free_centerlines=free_centerlines,
+        separation=separation,
+        snaps=snaps,
+        events=events,
+        solve_seconds=solve_time,
+        clearance_seconds=clearance_time,
+        wall_time=time.perf_counter() - started,
+    )
+
+
+def _free_roll_sweep(sweep: SweepProblem, assembly: Result, progress: Progress | None) -> tuple[np.ndarray, list[str]]:
+    """Centrelines (M, N+1, 3) of the sweep with the end fitting free to spin about its axis, and its events.
+
+    With the roll free, no twist can be locked in: the start is the placement without twist
+    (its end frame is the torque-free lock angle).
+    """
+    problem = sweep.problem
+    if problem.end_twist_deg != 0.0:
+        assembly = solve(replace(problem, end_twist_deg=0.0), progress=_prefixed(progress, "assembly, roll free"))
+    tracker = _Tracker(sweep, assembly, roll_free=True)
+    shapes = np.empty((sweep.pose_count, problem.hose.segments + 1, 3))
+    for k in range(sweep.pose_count):
+        reached = tracker.move_to(k)
+        shapes[k] = node_positions(tracker.props, reached.clamps, reached.state)
+        if progress is not None:
+            progress("sweep, end roll free", (k + 1) / sweep.pose_count)
+    return shapes, tracker.log.events
+
+
+def _nearest(index: TriangleIndex, pose: Pose, nodes: np.ndarray, outer_radius: float):
+    """Nearest approach of the hose to an obstacle at `pose`: computed in the obstacle's own
+    coordinates (the hose moved by the inverse pose), answered in world coordinates."""
+    found = index.nearest(pose.inverse().points(nodes), outer_radius)
+    return replace(found, on_hose=pose.point(found.on_hose), on_obstacle=pose.point(found.on_obstacle))
+
+
+def _mount_geometry(clamps: Clamps) -> np.ndarray:
+    """(4, 3): start tip, end tip (mm), start and end directions into the hose."""
+    return np.array([clamps.start_point, clamps.end_point, clamps.start_frame[2], -clamps.end_frame[2]])
+
+
+def _single_plane(mounts: np.ndarray) -> float:
+    """Single-plane offset (mm) of the mounts (4, 3) as _mount_geometry gives them; NaN if undefined."""
+    offset = single_plane_offset(Mount(mounts[0], mounts[2]), Mount(mounts[1], mounts[3]))
+    return math.nan if offset is None else offset
+
+
+def _prefixed(progress: Progress | None, label: str) -> Progress | None:
+    """progress with `label` put in front of the phase name (None stays None)."""
+    if progress is None:
+        return None
+    return lambda phase, fraction: progress(f"{label}: {phase}", fraction)

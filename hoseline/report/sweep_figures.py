@@ -1,0 +1,155 @@
+"""The interactive figures of the sweep report (plotly): the 3D view with a pose slider, and the plots.
+
+Both are plotly figures; sweep_html.py puts them in one self-contained page.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import plotly.graph_objects as go
+from plotly.subplots import make_subplots
+
+from hoseline.procedures.sweep_result import SweepResult
+
+MAX_FRAMES = 200  # poses shown by the slider of the 3D view (evenly picked; the plots show all)
+LOCKED_COLOUR = "#1f4e9c"
+FREE_COLOUR = "#e07b00"
+OBSTACLE_COLOUR = "#9a9a9a"
+OK_COLOUR = "#2a9d3c"
+VIOLATION_COLOUR = "#d62828"
+MOUNT_ARROW = 20.0  # mm, length of the arrows along the fitting directions
+
+
+def shown_poses(result: SweepResult) -> np.ndarray:
+    """Indices of the poses the 3D view's slider steps through (all, or MAX_FRAMES evenly picked)."""
+    count = result.pose_count
+    if count <= MAX_FRAMES:
+        return np.arange(count)
+    return np.unique(np.round(np.linspace(0, count - 1, MAX_FRAMES)).astype(int))
+
+
+def travel_axis(result: SweepResult) -> tuple[np.ndarray, str]:
+    """What the plots use as abscissa: the travel for a one-stage sweep, else the pose number."""
+    stages = result.sweep.stages
+    if len(stages) == 1:
+        unit = f" [{stages[0].unit}]" if stages[0].unit else ""
+        return result.sweep.travel, f"{stages[0].name}{unit}"
+    names = list(dict.fromkeys(s.name for s in stages))  # in order, each once
+    return np.arange(result.pose_count), "pose number (" + ", ".join(names) + ")"
+
+
+def view_figure(result: SweepResult) -> go.Figure:
+    """3D view: obstacles, the hose, its mounts and the nearest approaches, with a slider through the poses."""
+    sweep = result.sweep
+    figure = go.Figure()
+    moving = []  # (trace index, obstacle) of obstacles that move with a body
+    for obstacle in sweep.obstacles:
+        x, y, z = obstacle.vertices.T
+        i, j, k = obstacle.faces.T
+        figure.add_trace(go.Mesh3d(x=x, y=y, z=z, i=i, j=j, k=k, color=OBSTACLE_COLOUR, opacity=0.45,
+                                   name=obstacle.name, showlegend=True, hoverinfo="name", flatshading=True))
+        if obstacle.body is not None:
+            moving.append((len(figure.data) - 1, obstacle))
+    for clearance in result.clearances:  # the worst approach of all poses, marked once
+        k = clearance.worst
+        pair = np.vstack([clearance.on_hose[k], clearance.on_obstacle[k]])
+        figure.add_trace(go.Scatter3d(
+            x=pair[:, 0], y=pair[:, 1], z=pair[:, 2], mode="markers", marker=dict(symbol="x", size=5, color=VIOLATION_COLOUR),
+            name=f"worst clearance to {clearance.obstacle.name}: {clearance.distance[k]:.1f} mm ({result.travel_label(k)})",
+        ))
+    dynamic_start = len(figure.data)
+    first = int(shown_poses(result)[0])
+    for trace in _pose_traces(result, first, moving):
+        figure.add_trace(trace)
+    dynamic = list(range(dynamic_start, len(figure.data))) + [index for index, _ in moving]
+
+    frames, steps = [], []
+    for k in shown_poses(result):
+        name = str(int(k))
+        frames.append(go.Frame(name=name, data=_pose_traces(result, int(k), moving) + _moved_obstacles(result, int(k), moving),
+                               traces=dynamic))
+        steps.append(dict(method="animate", label=result.travel_label(int(k)),
+                          args=[[name], dict(mode="immediate", frame=dict(duration=0, redraw=True), transition=dict(duration=0))]))
+    figure.frames = frames
+    figure.update_layout(
+        scene=dict(aspectmode="data", xaxis_title="x [mm]", yaxis_title="y [mm]", zaxis_title="z [mm]"),
+        margin=dict(l=0, r=0, t=30, b=0),
+        height=640,
+        legend=dict(x=0.0, y=1.0, bgcolor="rgba(255,255,255,0.7)"),
+        sliders=[dict(active=0, steps=steps, currentvalue=dict(prefix="pose: "), pad=dict(t=10), x=0.12, len=0.88)],
+        updatemenus=[dict(type="buttons", direction="left", showactive=False, x=0.0, y=0.0, xanchor="left",
+                          yanchor="top", pad=dict(t=30), buttons=[
+            dict(label="play", method="animate",
+                 args=[None, dict(frame=dict(duration=80, redraw=True), fromcurrent=True, transition=dict(duration=0))]),
+            dict(label="pause", method="animate", args=[[None], dict(mode="immediate", frame=dict(duration=0, redraw=False))]),
+        ])],
+    )
+    return figure
+
+
+def _pose_traces(result: SweepResult, k: int, moving) -> list:
+    """The traces that change from pose to pose: the hose(s), the mounts, the nearest approaches."""
+    line = result.centerlines[k]
+    traces = [go.Scatter3d(x=line[:, 0], y=line[:, 1], z=line[:, 2], mode="lines", name="hose (both ends clamped)",
+                           line=dict(color=LOCKED_COLOUR, width=9), customdata=result.s,
+                           hovertemplate="s = %{customdata:.1f} mm<extra>hose</extra>")]
+    if result.free_centerlines is not None:
+        free = result.free_centerlines[k]
+        traces.append(go.Scatter3d(x=free[:, 0], y=free[:, 1], z=free[:, 2], mode="lines",
+                                   name="hose with the end free to spin (common error)",
+                                   line=dict(color=FREE_COLOUR, width=3, dash="dash"), hoverinfo="name"))
+    tips = np.vstack([result.start_points[k], result.end_points[k]])
+    ends = tips + MOUNT_ARROW * np.vstack([result.start_directions[k], result.end_directions[k]])
+    arrows = np.vstack([tips[0], ends[0], [np.nan] * 3, tips[1], ends[1]])
+    traces.append(go.Scatter3d(x=arrows[:, 0], y=arrows[:, 1], z=arrows[:, 2], mode="lines+markers", name="mounts",
+                               line=dict(color="black", width=5), marker=dict(size=3, color="black"), hoverinfo="name"))
+    for clearance in result.clearances:
+        pair = np.vstack([clearance.on_hose[k], clearance.on_obstacle[k]])
+        ok = clearance.distance[k] >= clearance.obstacle.clearance
+        traces.append(go.Scatter3d(
+            x=pair[:, 0], y=pair[:, 1], z=pair[:, 2], mode="lines+markers", showlegend=False,
+            line=dict(color=OK_COLOUR if ok else VIOLATION_COLOUR, width=4), marker=dict(size=3),
+            hovertemplate=f"{clearance.obstacle.name}: {clearance.distance[k]:.1f} mm<extra></extra>",
+        ))
+    return traces
+
+
+def _moved_obstacles(result: SweepResult, k: int, moving) -> list:
+    """The obstacles that move with a body, at pose k (only their vertices change)."""
+    traces = []
+    for _, obstacle in moving:
+        x, y, z = result.sweep.pose(obstacle.body, k).points(obstacle.vertices).T
+        traces.append(go.Mesh3d(x=x, y=y, z=z))
+    return traces
+
+
+def plots_figure(result: SweepResult) -> go.Figure:
+    """Clearance, bend radius, twisting moment, separation and reactions against travel."""
+    x, label = travel_axis(result)
+    hover = [result.travel_label(k) for k in range(result.pose_count)]
+    panels = ["clearance to the obstacles [mm]", "smallest bend radius (inside) [mm]",
+              "twisting moment [N*mm]", "end free to spin: separation [mm]", "mount reactions [N]"]
+    figure = make_subplots(rows=len(panels), cols=1, shared_xaxes=True, subplot_titles=panels, vertical_spacing=0.05)
+
+    def add(row, y, name, colour=None, dash=None):
+        figure.add_trace(go.Scatter(x=x, y=y, name=name, mode="lines", text=hover, legendgroup=str(row),
+                                    line=dict(color=colour, dash=dash),
+                                    hovertemplate="%{text}: %{y:.4g}<extra>" + name + "</extra>"), row=row, col=1)
+
+    for clearance in result.clearances:
+        add(1, clearance.distance, clearance.obstacle.name)
+        add(1, np.full(result.pose_count, clearance.obstacle.clearance), f"required for {clearance.obstacle.name}",
+            VIOLATION_COLOUR, "dash")
+    add(2, result.min_bend_radius, "smallest bend radius")
+    limit = result.sweep.problem.hose.min_bend_radius
+    if limit is not None:
+        add(2, np.full(result.pose_count, limit), "catalogue minimum", VIOLATION_COLOUR, "dash")
+    add(3, result.max_twisting_moment, "largest |twisting moment|")
+    add(3, result.max_differential_torque, "largest |differential torque|")
+    if result.separation is not None:
+        add(4, result.separation, "largest distance, clamped vs free to spin", FREE_COLOUR)
+    add(5, np.linalg.norm(result.start_force, axis=1), "start mount force")
+    add(5, np.linalg.norm(result.end_force, axis=1), "end mount force")
+    figure.update_xaxes(title_text=label, row=len(panels), col=1)
+    figure.update_layout(height=1300, margin=dict(l=60, r=20, t=40, b=40), hovermode="x unified")
+    return figure

@@ -1,0 +1,12 @@
+"""Shared fixtures: one solved hose for the export tests."""
+
+import pytest
+
+from hoseline.demo import demo_problem
+from hoseline.procedures.placement import solve
+
+
+@pytest.fixture(scope="session")
+def twisted_hose():
+    """The thesis brake hose of the demo at 180 degrees of twist (100 segments): bent in space and twisted."""
+    return solve(demo_problem(180.0))
