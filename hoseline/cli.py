@@ -140,3 +140,4 @@ def _print_exports(folder: Path, files: list[ExportedFile]) -> None:
 
 
 import hoseline.commands.sweep  # noqa: E402,F401  registers `hoseline sweep` on app
+import hoseline.commands.compare  # noqa: E402,F401  registers `hoseline compare`, `calibrate`, `validation-demo`

@@ -2,6 +2,7 @@
 9-16, the element-size rule and regression preset (equations 17-28, Table 6), and a placement."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -175,7 +176,7 @@ def test_thesis_hose_with_stiffeners_places_and_the_springs_stiffen_it():
                 segments=preset.segments)
     mounts = (Mount([-13.0, 0.0, -11.25], [0.0, 1.0, 0.0]), Mount([-173.064, -7.0, -11.25], [1.0, 0.0, 0.0]))
     plain = solve(Problem(base, *mounts, end_twist_deg=30.0))
-    stiff = solve(Problem(Hose(**{**base.__dict__, "stiffeners": preset.stiffeners}), *mounts, end_twist_deg=30.0))
+    stiff = solve(Problem(replace(base, stiffeners=preset.stiffeners), *mounts, end_twist_deg=30.0))
     assert stiff.stable and stiff.residual < 1e-10
     assert stiff.elastic_energy > plain.elastic_energy
     assert np.max(np.linalg.norm(stiff.centerline - plain.centerline, axis=1)) > 1.0

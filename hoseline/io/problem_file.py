@@ -449,15 +449,24 @@ def load_problem(path: str | Path) -> Problem:
     FileNotFoundError) when the problem file itself cannot be read.
     """
     path = Path(path)
+    return problem_from_dict(read_toml(path, ProblemFileError), source=str(path), base_dir=path.parent)
+
+
+def read_toml(path: Path, error: type[ValueError]) -> dict:
+    """The parsed TOML file, with `name` defaulting to the file's stem.
+
+    error: the exception class raised (with the path and the TOML line) for invalid content;
+    OSError propagates when the file cannot be read.
+    """
     with path.open("rb") as stream:
         try:
             data = tomllib.load(stream)
         except tomllib.TOMLDecodeError as exc:
-            raise ProblemFileError(f"{path}: not valid TOML: {exc}") from None
+            raise error(f"{path}: not valid TOML: {exc}") from None
         except UnicodeDecodeError:
-            raise ProblemFileError(f"{path}: not UTF-8 text: save the problem file as UTF-8") from None
+            raise error(f"{path}: not UTF-8 text: save the file as UTF-8") from None
     data.setdefault("name", path.stem)
-    return problem_from_dict(data, source=str(path), base_dir=path.parent)
+    return data
 
 
 def problem_to_dict(problem: Problem) -> dict:

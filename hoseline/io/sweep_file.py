@@ -40,15 +40,13 @@ import typing
 from pathlib import Path
 from typing import Annotated
 
-import tomllib
-
 import pydantic
 from pydantic import AfterValidator, Field, model_validator
 
 from hoseline.io import problem_file
 from hoseline.io.obstacle_mesh import ObstacleFileError, read_mesh
 from hoseline.io.pose_table import PoseTableError, read_pose_table
-from hoseline.io.problem_file import Direction, ProblemFileError, Vector, _Section, problem_from_dict
+from hoseline.io.problem_file import Direction, ProblemFileError, Vector, _Section, problem_from_dict, read_toml
 from hoseline.model.motion import BodyMotion, Rotation, Translation, generated_motion
 from hoseline.model.sweep import DEFAULT_CLEARANCE, Obstacle, SweepProblem
 
@@ -157,15 +155,7 @@ def load_sweep(path: str | Path) -> SweepProblem:
     table), and OSError when the sweep file itself cannot be read.
     """
     path = Path(path)
-    with path.open("rb") as stream:
-        try:
-            data = tomllib.load(stream)
-        except tomllib.TOMLDecodeError as exc:
-            raise SweepFileError(f"{path}: not valid TOML: {exc}") from None
-        except UnicodeDecodeError:
-            raise SweepFileError(f"{path}: not UTF-8 text: save the sweep file as UTF-8") from None
-    data.setdefault("name", path.stem)
-    return sweep_from_dict(data, source=str(path), base_dir=path.parent)
+    return sweep_from_dict(read_toml(path, SweepFileError), source=str(path), base_dir=path.parent)
 
 
 def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> SweepProblem:

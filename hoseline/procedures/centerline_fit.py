@@ -14,8 +14,9 @@ The thesis fitted a few short cylinders by hand; this does it along the whole sc
    station are fitted with a cylinder whose axis may bend (axis point, direction, curvature,
    radius) by robust least squares (soft-L1 loss, so remaining outliers count little).  Where the scan covers less
    than MIN_ARC_FOR_RADIUS_DEG of the circumference, the radius is fixed at the median of
-   the well-covered sections and only the axis is fitted.  Too few points: a gap; points on
-   one side of the station only (an end, the edge of a gap): no station.
+   the well-covered sections and only the axis is fitted.  Stretches of the guide longer
+   than a radius on which no point projects are reported as gaps and get no station;
+   neither do stations with too few points or points on one side only (the ends).
 5. The guide is rebuilt from the fitted axis and the cylinders fitted once more.
 
 The station of each cylinder is the point of its axis in the station's cross-section (the
@@ -30,6 +31,8 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 from scipy.spatial import cKDTree, distance_matrix
+
+from hoseline.procedures.deviation import closest_on_polyline
 
 MIN_ARC_FOR_RADIUS_DEG = 120.0  # below this coverage the radius and the axis cannot be told apart
 MIN_SECTION_POINTS = 25
@@ -47,7 +50,7 @@ class CenterlineFit:
     radius: (m,) fitted radius per section; radius_fitted: False where it was fixed (low coverage).
     coverage_deg: (m,) arc of the circumference the section's points cover.
     point_count: (m,) surface points per section.  rms: (m,) fit residual per section.
-    gaps: (from, to) arc-length ranges with too few points for a cylinder.
+    gaps: (from, to) arc-length ranges along the guide with no scan points (longer than a radius).
     outliers: points dropped as isolated.
     """
 
@@ -179,21 +182,22 @@ def _fit_sections(points: np.ndarray, guide: np.ndarray, radius: float, section:
     tangents /= np.linalg.norm(tangents, axis=1)[:, None]
     tree = cKDTree(points)
     reach = np.hypot(0.5 * section, 2.0 * radius)
-    fits, gaps_at = [], []
+    guide_s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(guide, axis=0), axis=1))])
+    gaps = _coverage_gaps(points, guide, radius)
+    fits = []
     for index, (centre, tangent) in enumerate(zip(guide, tangents)):
+        if any(low <= guide_s[index] <= high for low, high in gaps):
+            continue
         near = points[tree.query_ball_point(centre, reach)]
         along = (near - centre) @ tangent
         inside = np.abs(along) <= 0.5 * section
         near, along = near[inside], along[inside]
-        if near.shape[0] < MIN_SECTION_POINTS:
-            gaps_at.append((index, None))
-        elif min(np.sum(along < 0.0), np.sum(along > 0.0)) >= 0.25 * near.shape[0]:
+        if near.shape[0] >= MIN_SECTION_POINTS and min(np.sum(along < 0), np.sum(along > 0)) >= 0.25 * near.shape[0]:
             fits.append((index, _fit_cylinder(near, centre, tangent, radius)))
-        # else: points on one side of the station only (an end, the edge of a gap): no station
+        # else: too few points, or points on one side of the station only (an end): no station
     fixed_radius = np.median([f["radius"] for _, f in fits if f["radius_fitted"]] or [radius])
     fits = [(i, _fit_cylinder(f["points"], f["axis_point"], f["tangent"], fixed_radius, False))
             if not f["radius_fitted"] else (i, f) for i, f in fits]
-    guide_s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(guide, axis=0), axis=1))])
     if not fits:
         raise ValueError("no section of the scan has enough points for a cylinder: is it a hose, in mm?")
     axis_points = np.array([f["axis_point"] for _, f in fits])
@@ -207,19 +211,15 @@ def _fit_sections(points: np.ndarray, guide: np.ndarray, radius: float, section:
         coverage_deg=np.array([f["coverage"] for _, f in fits]),
         point_count=np.array([f["points"].shape[0] for _, f in fits]),
         rms=np.array([f["rms"] for _, f in fits]),
-        gaps=_gap_ranges([i for i, _ in gaps_at], guide_s),
+        gaps=gaps,
     )
 
 
-def _gap_ranges(indices: list[int], guide_s: np.ndarray) -> list[tuple[float, float]]:
-    """Runs of consecutive gap stations as (from, to) guide arc lengths, mm."""
-    ranges: list[tuple[float, float]] = []
-    for i in indices:
-        if ranges and guide_s[i - 1] == ranges[-1][1]:
-            ranges[-1] = (ranges[-1][0], float(guide_s[i]))
-        else:
-            ranges.append((float(guide_s[i]), float(guide_s[i])))
-    return ranges
+def _coverage_gaps(points: np.ndarray, guide: np.ndarray, radius: float) -> list[tuple[float, float]]:
+    """(from, to) arc lengths along the guide, mm, longer than a radius, on which no scan point projects."""
+    along = np.sort(closest_on_polyline(points, guide)[1])
+    steps = np.diff(along)
+    return [(float(along[i]), float(along[i + 1])) for i in np.flatnonzero(steps > radius)]
 
 
 def _fit_cylinder(points, centre, tangent, radius, free_radius=True) -> dict:

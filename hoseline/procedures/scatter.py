@@ -55,9 +55,9 @@ class ScatterEnvelope:
 def scatter_envelope(centerlines: list[np.ndarray], spacing: float = 5.0) -> ScatterEnvelope:
     """Envelope of two or more scan centrelines (each (n_k, 3), ordered from the same end), mm.
 
-    Stations every `spacing` mm along the first centreline; at each, every scan contributes
-    its point nearest to the station's cross-section (its closest point), twice: once to form
-    the mean, once more measured from the mean.
+    Stations every `spacing` mm along the first centreline; the mean of every scan's closest
+    point to a station is the mean centreline there, and each scan's closest point to that
+    mean point gives its distance from the mean and from the other scans.
     """
     if len(centerlines) < 2:
         raise ValueError(f"{len(centerlines)} scan(s): the scatter needs at least two scans of the same mounting")

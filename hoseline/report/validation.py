@@ -37,11 +37,13 @@ def write_validation_report(
     envelope: ScatterEnvelope | None = None,
     calibration: Calibration | None = None,
     twist_paths: Sequence[TwistPath] = (),
+    extra_files: dict[str, str] | None = None,
 ) -> Path:
     """Write report.html, deviation.png, deviation.csv and validation.json into `out_dir` (all or none).
 
     comparisons: one per scan.  envelope: scatter of repeated scans.  calibration: a fit of
     the hose to the scans.  twist_paths: model variants followed through a twist.
+    extra_files: more text files to write with them, {file name: text}.
     """
     png = deviation_png(comparisons, envelope)
     twist_png = twist_paths_png(twist_paths) if twist_paths else None
@@ -53,6 +55,8 @@ def write_validation_report(
         write_text(staging / "deviation.csv", deviation_csv(comparisons))
         write_text(staging / "validation.json", json.dumps(document, indent=1) + "\n")
         write_text(staging / "report.html", _html(comparisons, envelope, calibration, twist_paths, png, twist_png))
+        for name, text in (extra_files or {}).items():
+            write_text(staging / name, text)
     return Path(out_dir)
 
 
@@ -128,7 +132,8 @@ def overlay_figure(comparisons: Sequence[Comparison]) -> go.Figure:
     figure = go.Figure()
     rng = np.random.default_rng(0)
     share = max(1, OVERLAY_POINTS // max(1, len(comparisons)))
-    for c in comparisons:
+    largest = max([float(np.max(c.deviation.distance)) for c in comparisons] + [1e-9])
+    for index, c in enumerate(comparisons):
         model = c.result.centerline
         figure.add_trace(go.Scatter3d(x=model[:, 0], y=model[:, 1], z=model[:, 2], mode="lines",
                                       line={"width": 6}, name=f"model {c.label}"))
@@ -138,13 +143,13 @@ def overlay_figure(comparisons: Sequence[Comparison]) -> go.Figure:
         stations = c.fit.points
         figure.add_trace(go.Scatter3d(
             x=stations[:, 0], y=stations[:, 1], z=stations[:, 2], mode="markers", name=f"scan centreline {c.label}",
-            marker={"size": 3, "color": c.deviation.distance, "colorscale": "Turbo", "cmin": 0.0,
-                    "cmax": max(float(np.max(c.deviation.distance)), 1e-9), "colorbar": {"title": "deviation [mm]"}},
+            marker={"size": 3, "color": c.deviation.distance, "colorscale": "Turbo", "cmin": 0.0, "cmax": largest,
+                    "showscale": index == 0, "colorbar": {"title": "deviation [mm]"}},
             text=[f"deviation {d:.2f} mm at s = {s:.1f} mm" for d, s in zip(c.deviation.distance, c.deviation.s_model)],
         ))
     figure.update_layout(scene={"aspectmode": "data", "xaxis_title": "x [mm]", "yaxis_title": "y [mm]",
                                 "zaxis_title": "z [mm]"}, height=700, margin={"l": 0, "r": 0, "t": 30, "b": 0},
-                         legend={"itemsizing": "constant"})
+                         legend={"itemsizing": "constant", "x": 0.0, "y": 1.0})
     return figure
 
 

@@ -1,0 +1,62 @@
+"""Reading scans: PLY (ascii, binary both byte orders), text x y z, STL (ascii, binary); messages name the place."""
+
+import struct
+
+import numpy as np
+import pytest
+
+from hoseline.io.scans import ScanFileError, read_scan, write_ply
+
+POINTS = np.random.default_rng(1).normal(size=(30, 3)) * 50.0
+
+
+def test_binary_ply_round_trip(tmp_path):
+    path = write_ply(tmp_path / "scan.ply", POINTS)
+    np.testing.assert_array_equal(read_scan(path), POINTS)
+
+
+def test_ascii_and_big_endian_ply_with_extra_properties(tmp_path):
+    header = "ply\nformat {}\nelement vertex 30\nproperty float x\nproperty float y\nproperty float z\n" \
+             "property uchar red\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
+    lines = "".join(f"{x} {y} {z} 7\n" for x, y, z in POINTS)
+    (tmp_path / "a.ply").write_text(header.format("ascii 1.0") + lines)
+    np.testing.assert_allclose(read_scan(tmp_path / "a.ply"), POINTS, rtol=1e-6)
+    record = np.dtype([("x", ">f4"), ("y", ">f4"), ("z", ">f4"), ("red", "u1")])
+    table = np.zeros(30, dtype=record)
+    table["x"], table["y"], table["z"] = POINTS.T
+    (tmp_path / "b.ply").write_bytes(header.format("binary_big_endian 1.0").encode() + table.tobytes())
+    np.testing.assert_allclose(read_scan(tmp_path / "b.ply"), POINTS, rtol=1e-6)
+
+
+def test_text_with_header_commas_and_comments(tmp_path):
+    text = "x,y,z\n# exported from the scanner\n" + "".join(f"{x},{y},{z}\n" for x, y, z in POINTS)
+    (tmp_path / "scan.csv").write_text(text)
+    np.testing.assert_allclose(read_scan(tmp_path / "scan.csv"), POINTS)
+
+
+def test_stl_vertices_ascii_and_binary_are_merged(tmp_path):
+    triangles = POINTS[:30].reshape(10, 3, 3)
+    facets = "".join("facet normal 0 0 1\nouter loop\n" + "".join(f"vertex {x} {y} {z}\n" for x, y, z in t)
+                     + "endloop\nendfacet\n" for t in np.concatenate([triangles, triangles]))
+    (tmp_path / "a.stl").write_text(f"solid hose\n{facets}endsolid hose\n")
+    assert read_scan(tmp_path / "a.stl").shape == (30, 3)  # every vertex twice in the file, once in the cloud
+    body = b"".join(struct.pack("<12fH", 0, 0, 1, *t.ravel(), 0) for t in triangles.astype(np.float32))
+    (tmp_path / "b.stl").write_bytes(b"\0" * 80 + struct.pack("<I", 10) + body)
+    np.testing.assert_allclose(np.sort(read_scan(tmp_path / "b.stl"), axis=0), np.sort(POINTS, axis=0), rtol=1e-6)
+
+
+@pytest.mark.parametrize("name, content, fragments", [
+    ("scan.xyz", "1 2 3\n" * 25 + "4 five 6\n", ["line 26", "not three numbers"]),
+    ("scan.xyz", "1 2\n", ["line 1", "has 2 numbers"]),
+    ("scan.txt", "1 2 3\n", ["only 1 points"]),
+    ("scan.obj", "v 1 2 3\n", ["unknown scan format '.obj'", ".ply"]),
+    ("scan.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float u\nend_header\n1\n", ["no x, y, z"]),
+    ("scan.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 99\nproperty float x\nproperty float y\n"
+                 "property float z\nend_header\n", ["99 vertices", "too short"]),
+])
+def test_bad_scans_are_refused_with_the_place_and_the_fix(tmp_path, name, content, fragments):
+    (tmp_path / name).write_text(content)
+    with pytest.raises(ScanFileError) as error:
+        read_scan(tmp_path / name)
+    for fragment in fragments:
+        assert fragment in str(error.value)

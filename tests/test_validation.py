@@ -1,0 +1,56 @@
+"""Scans to centrelines, deviations, thresholds, the scatter of repeated scans and the twist path."""
+
+import numpy as np
+import pytest
+from validation_cases import RADIUS, brake_hose, scanned
+
+from hoseline.procedures.centerline_fit import fit_centerline
+from hoseline.procedures.deviation import Thresholds, closest_on_polyline, deviation
+from hoseline.procedures.scatter import scatter_envelope
+from hoseline.procedures.twist_path import follow_twist
+
+
+def test_centerline_and_radius_from_a_one_sided_noisy_scan_with_a_gap():
+    truth, points = scanned(180.0)
+    fit = fit_centerline(points, RADIUS, start_hint=truth.problem.start.point)
+    error = deviation(truth.centerline, fit.points)
+    assert error.max < 0.3 and error.mean < 0.12  # noise 0.1 mm, 2 % stray points, half the surface seen
+    assert abs(fit.radius_median - RADIUS) < 0.03 and fit.radius_scatter < 0.05
+    assert np.all(fit.coverage_deg < 250.0)  # one-sided indeed
+    assert fit.outliers > 0
+    (low, high), = fit.gaps  # the 150-170 mm gap of the scan, along the fitted guide
+    assert 10.0 < high - low < 25.0
+    assert np.linalg.norm(fit.points[0] - truth.problem.start.point) < 15.0  # numbered from the start mount
+
+
+def test_closest_point_on_a_polyline_and_the_statistics():
+    polyline = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [10.0, 10.0, 0.0]])
+    points = np.array([[5.0, 2.0, 0.0], [12.0, 4.0, 0.0], [-3.0, 0.0, 4.0], [10.0, 15.0, 0.0]])
+    distance, arc, closest = closest_on_polyline(points, polyline)
+    np.testing.assert_allclose(distance, [2.0, 2.0, 5.0, 5.0])
+    np.testing.assert_allclose(arc, [5.0, 14.0, 0.0, 20.0])
+    np.testing.assert_allclose(closest[1], [10.0, 4.0, 0.0])
+    result = deviation(polyline, points)
+    assert result.mean == pytest.approx(3.5) and result.max == 5.0 and result.s_at_max == 0.0
+    assert result.rms == pytest.approx(np.sqrt(np.mean(np.square([2, 2, 5, 5]))))
+    assert result.passes(Thresholds(4.0)) and not result.passes(Thresholds(4.0, max=4.5))
+    assert Thresholds.thesis(0.0).mean == 1.0 and Thresholds.thesis(180.0).mean == 6.0
+
+
+def test_scatter_envelope_of_shifted_scans():
+    line = np.column_stack([np.linspace(0.0, 100.0, 51), np.zeros(51), np.zeros(51)])
+    scans = [line + [0.0, offset, 0.0] for offset in (-3.0, 0.0, 1.0, 2.0)]
+    envelope = scatter_envelope(scans)
+    np.testing.assert_allclose(envelope.spread, 5.0, atol=1e-9)
+    np.testing.assert_allclose(envelope.mean[:, 1], 0.0, atol=1e-9)
+    assert envelope.margin == pytest.approx(3.0) and envelope.max_spread == pytest.approx(5.0)
+    with pytest.raises(ValueError, match="at least two"):
+        scatter_envelope(scans[:1])
+
+
+def test_twist_path_of_the_plain_model_is_smooth():
+    path = follow_twist(brake_hose(segments=20, mass=0.0, twist=180.0), np.arange(0.0, 181.0, 30.0), "25x")
+    assert path.smooth and not path.failure
+    assert path.centerlines.shape == (7, 21, 3)
+    np.testing.assert_allclose(path.centerlines[0, -1], [-173.064, -7.0, -11.25], atol=1e-6)
+    assert np.all(path.steps > 1.0)  # it moves at every step, without jumps
