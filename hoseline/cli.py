@@ -45,6 +45,17 @@ def _fail(message: str, code: int) -> typer.Exit:
     return typer.Exit(code)
 
 
+def _read_input(reader: Callable, path: Path, what: str, errors: tuple[type[Exception], ...], *args):
+    """reader(path, *args), with bad content (`errors`) or an unreadable file ending the command
+    with one red line and exit code BAD_INPUT.  what: e.g. "problem file", for the message."""
+    try:
+        return reader(path, *args)
+    except errors as exc:
+        raise _fail(str(exc), BAD_INPUT) from None
+    except OSError as exc:
+        raise _fail(f"cannot read {what} {path}: {exc.strerror or exc}", BAD_INPUT) from None
+
+
 @contextmanager
 def _progress(quiet: bool) -> Iterator[Callable[[str, float], None] | None]:
     """A progress(phase, fraction) callback drawing one Rich bar per phase, or None when quiet."""
@@ -85,12 +96,7 @@ def solve_command(
 ) -> None:
     """Place the hose of a problem file; write centerline.csv, result.json and the exports asked for."""
     formats = _formats(export)
-    try:
-        problem = load_problem(problem_file)
-    except ProblemFileError as exc:
-        raise _fail(str(exc), BAD_INPUT) from None
-    except OSError as exc:
-        raise _fail(f"cannot read problem file {problem_file}: {exc.strerror or exc}", BAD_INPUT) from None
+    problem = _read_input(load_problem, problem_file, "problem file", (ProblemFileError,))
 
     with _errors_to_exit_codes(out):
         with _progress(quiet) as progress:

@@ -44,6 +44,21 @@ def perturbed(frames, end, delta, roll_free):
     return new, end
 
 
+def finite_differences(energy_and_gradient, frames, end, n, roll_free, eps):
+    """Central differences of the energy (-> gradient) and of the gradient (-> Hessian) over
+    the n rotation unknowns; energy_and_gradient(frames, end_frame) -> (energy, gradient)."""
+    fd_grad = np.empty(n)
+    fd_hess = np.empty((n, n))
+    for j in range(n):
+        delta = np.zeros(n)
+        delta[j] = eps
+        e_plus, g_plus = energy_and_gradient(*perturbed(frames, end, delta, roll_free))
+        e_minus, g_minus = energy_and_gradient(*perturbed(frames, end, -delta, roll_free))
+        fd_grad[j] = (e_plus - e_minus) / (2 * eps)
+        fd_hess[:, j] = (g_plus - g_minus) / (2 * eps)
+    return fd_grad, fd_hess
+
+
 @pytest.mark.parametrize(
     "stiffness, loaded, roll_free",
     [
@@ -63,19 +78,9 @@ def test_gradient_and_hessian_match_finite_differences(stiffness, loaded, roll_f
     loads = rng.normal(size=(count, 3)) if loaded else np.zeros((count, 3))
     energy, grad, band = lagrangian(frames, start, end, stiffness, h, loads, roll_free)
     hess = dense(band)
-    n = grad.size
-    eps = 1e-5
-    fd_grad = np.empty(n)
-    fd_hess = np.empty((n, n))
-    for j in range(n):
-        delta = np.zeros(n)
-        delta[j] = eps
-        fp, ep = perturbed(frames, end, delta, roll_free)
-        fm, em = perturbed(frames, end, -delta, roll_free)
-        e_plus, g_plus, _ = lagrangian(fp, start, ep, stiffness, h, loads, roll_free)
-        e_minus, g_minus, _ = lagrangian(fm, start, em, stiffness, h, loads, roll_free)
-        fd_grad[j] = (e_plus - e_minus) / (2 * eps)
-        fd_hess[:, j] = (g_plus - g_minus) / (2 * eps)
+    fd_grad, fd_hess = finite_differences(
+        lambda f, e: lagrangian(f, start, e, stiffness, h, loads, roll_free)[:2], frames, end, grad.size, roll_free, 1e-5
+    )
     assert np.allclose(grad, fd_grad, rtol=1e-7, atol=1e-8 * np.max(np.abs(grad)))
     # the gradient is taken at delta = 0 each time, so its finite difference is the Hessian
     # of the pulled-back energy only up to the antisymmetric Lie-bracket term 1/2 [delta_j] x g;

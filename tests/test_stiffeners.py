@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from test_energy_derivatives import dense, perturbed, random_frames
+from test_energy_derivatives import dense, finite_differences, perturbed, random_frames
 
 from hoseline import Hose, Mount, Problem, solve
 from hoseline.mechanics.energy import BANDWIDTH, assemble, elastic_energy, joint_moments
@@ -44,19 +44,14 @@ def test_gradient_and_hessian_with_springs_match_finite_differences(count, roll_
     stiffness = np.array([0.3, 0.3, 2.0])
     loads = rng.normal(size=(n_seg, 3))
     energy, grad, band = lagrangian(frames, start, end, stiffness, h, loads, roll_free, springs)
-    n = grad.size
-    eps = 1e-6
-    fd_grad = np.empty(n)
-    fd_hess = np.empty((n, n))
-    for j in range(n):
-        delta = np.zeros(n)
-        delta[j] = eps
-        fp, ep = perturbed(frames, end, delta, roll_free)
-        fm, em = perturbed(frames, end, -delta, roll_free)
-        e_plus, g_plus, _ = lagrangian(fp, start, ep, stiffness, h, loads, roll_free, springs)
-        e_minus, g_minus, _ = lagrangian(fm, start, em, stiffness, h, loads, roll_free, springs)
-        fd_grad[j] = (e_plus - e_minus) / (2 * eps)
-        fd_hess[:, j] = (g_plus - g_minus) / (2 * eps)
+    fd_grad, fd_hess = finite_differences(
+        lambda f, e: lagrangian(f, start, e, stiffness, h, loads, roll_free, springs)[:2],
+        frames,
+        end,
+        grad.size,
+        roll_free,
+        1e-6,
+    )
     assert np.allclose(grad, fd_grad, rtol=1e-6, atol=1e-7 * np.max(np.abs(grad)))
     hess = dense(band)
     assert np.allclose(hess, 0.5 * (fd_hess + fd_hess.T), rtol=1e-5, atol=1e-6 * np.max(np.abs(hess)))

@@ -18,7 +18,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from hoseline.cli import BAD_INPUT, OUT_HELP, QUIET_HELP, _errors_to_exit_codes, _fail, app
+from hoseline.cli import BAD_INPUT, OUT_HELP, QUIET_HELP, _errors_to_exit_codes, _fail, _read_input, app
 from hoseline.io.problem_file import ProblemFileError, load_problem, problem_to_toml
 from hoseline.io.scans import ScanFileError, read_scan
 from hoseline.model.problem import Problem
@@ -130,21 +130,11 @@ def validation_demo_command(
 
 
 def _load_problem(path: Path) -> Problem:
-    try:
-        return load_problem(path)
-    except ProblemFileError as exc:
-        raise _fail(str(exc), BAD_INPUT) from None
-    except OSError as exc:
-        raise _fail(f"cannot read problem file {path}: {exc.strerror or exc}", BAD_INPUT) from None
+    return _read_input(load_problem, path, "problem file", (ProblemFileError,))
 
 
 def _load_scan(path: Path, min_points: int = 20):
-    try:
-        return read_scan(path, min_points)
-    except ScanFileError as exc:
-        raise _fail(str(exc), BAD_INPUT) from None
-    except OSError as exc:
-        raise _fail(f"cannot read scan {path}: {exc.strerror or exc}", BAD_INPUT) from None
+    return _read_input(read_scan, path, "scan", (ScanFileError,), min_points)
 
 
 def _twists(given: list[float] | None, count: int, problem: Problem) -> list[float]:

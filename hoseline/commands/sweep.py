@@ -13,7 +13,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from hoseline.cli import BAD_INPUT, OUT_HELP, QUIET_HELP, _errors_to_exit_codes, _fail, _progress, app
+from hoseline.cli import BAD_INPUT, OUT_HELP, QUIET_HELP, _errors_to_exit_codes, _fail, _progress, _read_input, app
 from hoseline.io.sweep_file import SweepFileError, load_sweep
 from hoseline.procedures.sweep import run_sweep
 from hoseline.procedures.sweep_result import SweepResult
@@ -35,13 +35,8 @@ def sweep_command(
     if demo:
         sweep, text = demo_sweep(), ""
     else:
-        try:
-            sweep = load_sweep(sweep_file)
-            text = sweep_file.read_text(encoding="utf-8")
-        except SweepFileError as exc:
-            raise _fail(str(exc), BAD_INPUT) from None
-        except OSError as exc:
-            raise _fail(f"cannot read sweep file {sweep_file}: {exc.strerror or exc}", BAD_INPUT) from None
+        sweep = _read_input(load_sweep, sweep_file, "sweep file", (SweepFileError,))
+        text = sweep_file.read_text(encoding="utf-8")
 
     with _errors_to_exit_codes(out):
         with _progress(quiet) as progress:

@@ -33,17 +33,25 @@ class Health:
     end_moment: np.ndarray
 
 
+def station_moments(props: RodProperties, clamps: Clamps, state: RodState):
+    """Internal moments (N*mm, world), discrete Darboux vectors (1/mm, material) and unit
+    tangents at the N+1 stations of an equilibrium `state` under `clamps`."""
+    end_frame = end_frame_of(clamps, state)
+    moments, darboux = joint_moments(
+        state.frames, clamps.start_frame, end_frame, props.stiffness, props.segment_length, True, props.springs
+    )
+    tangents = np.vstack([clamps.start_frame[2][None], state.frames[:, 2], end_frame[2][None]])
+    node_tangent = tangents[:-1] + tangents[1:]
+    node_tangent /= np.linalg.norm(node_tangent, axis=1)[:, None]
+    return moments, darboux, node_tangent
+
+
 def hose_health(props: RodProperties, clamps: Clamps, state: RodState, outer_radius: float) -> Health:
     """Bend radius, twisting moment and mount reactions of an equilibrium `state` under `clamps`.
 
     outer_radius: mm, for the bend radius to the inside of the bend.
     """
-    h = props.segment_length
-    end_frame = end_frame_of(clamps, state)
-    moments, darboux = joint_moments(state.frames, clamps.start_frame, end_frame, props.stiffness, h)
-    tangents = np.vstack([clamps.start_frame[2][None], state.frames[:, 2], end_frame[2][None]])
-    node_tangent = tangents[:-1] + tangents[1:]
-    node_tangent /= np.linalg.norm(node_tangent, axis=1)[:, None]
+    moments, darboux, node_tangent = station_moments(props, clamps, state)
     curvature = np.hypot(darboux[:, 0], darboux[:, 1])
     with np.errstate(divide="ignore"):
         bend_radius = 1.0 / curvature - outer_radius

@@ -7,12 +7,13 @@ import time
 
 import numpy as np
 
-from hoseline.mechanics.energy import elastic_energy, joint_moments
+from hoseline.mechanics.energy import elastic_energy
 from hoseline.mechanics.newton import RodProperties, evaluate
 from hoseline.mechanics.rod import Clamps, RodState, centerline, gravity_energy
 from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model.mounts import single_plane_offset
 from hoseline.model.problem import Problem
+from hoseline.procedures.hose_health import station_moments
 from hoseline.procedures.result import Result
 
 NEUTRAL_MARGIN = 1e-6  # margins below this fraction of EI/L^2 are rounding of an exact zero
@@ -37,12 +38,7 @@ def build_result(
     n_seg = props.segments
     s = h * np.arange(n_seg + 1)
     nodes = centerline(state.frames, clamps.start_point, h)
-    moments, darboux = joint_moments(
-        state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs
-    )
-    tangents = np.vstack([clamps.start_frame[2], state.frames[:, 2], clamps.end_frame[2]])
-    node_tangent = tangents[:-1] + tangents[1:]
-    node_tangent /= np.linalg.norm(node_tangent, axis=1)[:, None]
+    moments, darboux, node_tangent = station_moments(props, clamps, state)
     twisting = np.einsum("ij,ij->i", moments, node_tangent)
     bending = np.linalg.norm(moments - twisting[:, None] * node_tangent, axis=1)
     curvature = np.hypot(darboux[:, 0], darboux[:, 1])
