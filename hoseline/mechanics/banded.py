@@ -161,8 +161,13 @@ def kkt_solve(lower, diag, jac_t, grad, constraint):
     of the constraint.
     """
     n = grad.shape[0]
-    h_inv_jt = ldlt_solve(lower, diag, jac_t)
-    h_inv_g = ldlt_solve(lower, diag, grad)
+    # one solve with four columns costs hardly more than one (the column loops pipeline)
+    columns = np.empty((n, 4))
+    columns[:, :3] = jac_t
+    columns[:, 3] = grad
+    solved = _ldlt_solve_columns(lower, diag, columns)
+    h_inv_jt = solved[:, :3]
+    h_inv_g = solved[:, 3]
     schur = np.zeros((3, 3))
     rhs = np.zeros(3)
     for i in range(n):
@@ -183,12 +188,16 @@ def kkt_solve(lower, diag, jac_t, grad, constraint):
 
 @njit(cache=True)
 def banded_matvec(band, x):
-    """y = H x for symmetric H in lower band storage."""
+    """y = H x for symmetric H in lower band storage; x of shape (n,) or (n, m)."""
     n, width = band.shape
     y = np.zeros_like(x)
+    columns = x.reshape(n, -1)
+    out = y.reshape(n, -1)
     for i in range(n):
-        y[i] += band[i, 0] * x[i]
+        for j in range(columns.shape[1]):
+            out[i, j] += band[i, 0] * columns[i, j]
         for k in range(1, min(width - 1, i) + 1):
-            y[i] += band[i, k] * x[i - k]
-            y[i - k] += band[i, k] * x[i]
+            for j in range(columns.shape[1]):
+                out[i, j] += band[i, k] * columns[i - k, j]
+                out[i - k, j] += band[i, k] * columns[i, j]
     return y

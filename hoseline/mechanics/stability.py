@@ -32,11 +32,13 @@ def _dense_pairs(band: np.ndarray, jac_t: np.ndarray, count: int) -> tuple[np.nd
     return values, basis @ vectors
 
 
-def smallest_eigenpairs(band: np.ndarray, jac_t: np.ndarray, count: int = 1, tolerance: float = 1e-8):
+def smallest_eigenpairs(band: np.ndarray, jac_t: np.ndarray, count: int = 1, tolerance: float = 1e-6):
     """The `count` algebraically smallest eigenvalues (N*mm/rad^2) and unit eigenvectors of the
     Hessian restricted to {v : J v = 0}.
 
     band: lower band storage of the Hessian; jac_t: (n, 3) transposed constraint Jacobian.
+    tolerance: relative residual of the eigenpairs (the eigenvalues are then accurate to
+    about its square).
     """
     n = band.shape[0]
     lower, diag, tiny = ldlt_banded(band, 0.0)
@@ -59,7 +61,7 @@ def smallest_eigenpairs(band: np.ndarray, jac_t: np.ndarray, count: int = 1, tol
     values = np.full(block, np.inf)
     for _ in range(200):
         vectors, _ = np.linalg.qr(vectors)
-        hv = np.column_stack([banded_matvec(band, vectors[:, j]) for j in range(block)])
+        hv = banded_matvec(band, vectors)
         ritz_values, ritz_vectors = np.linalg.eigh(vectors.T @ hv)
         vectors = vectors @ ritz_vectors
         raw = hv @ ritz_vectors - vectors * ritz_values

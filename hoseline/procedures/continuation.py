@@ -162,7 +162,7 @@ def _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, 
     stability, then move to the lowest stable equilibrium next to it."""
     stable_t, stable_state = t, state
     unstable_t, unstable_state = t_next, trial
-    for _ in range(4):  # bracket the crossing (for the report) to 1/16 of the step
+    for _ in range(3):  # bracket the crossing (for the report) to 1/8 of the step
         middle = 0.5 * (stable_t + unstable_t)
         mid_state, mid_report = solve_equilibrium(props, path(middle), stable_state, tolerance=control.tolerance)
         log.iterations += mid_report.iterations

@@ -26,7 +26,7 @@ import numpy as np
 
 from hoseline.mechanics.newton import RodProperties, end_frame_of, node_positions, solve_equilibrium, total_energy
 from hoseline.mechanics.rod import Clamps, RodState
-from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rotation_matrix, rotation_vector
+from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rotate_frames, rotation_matrix, rotation_vector
 from hoseline.mechanics.stiffeners import spring_set
 from hoseline.model.hose import Hose
 from hoseline.model.problem import Problem
@@ -221,9 +221,9 @@ def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.
     tangent = clamps.start_frame[2]
 
     def candidate(bend_axis: np.ndarray) -> RodState:
-        frames = np.empty((props.segments, 3, 3))
-        for i in range(props.segments):
-            frames[i] = clamps.start_frame @ (rotation_matrix(ramp[i]) @ rotation_matrix(bend_axis * slope[i])).T
+        # start frame, bent by the mode about bend_axis, then turned by the spread end rotation
+        straight = np.repeat(clamps.start_frame[None], props.segments, axis=0)
+        frames = rotate_frames(rotate_frames(straight, np.outer(slope, bend_axis)), ramp)
         return RodState(frames, np.zeros(3), 0.0)
 
     out_of_plane = np.cross(tangent, axis)
