@@ -209,3 +209,21 @@ def test_jump_check_sends_big_moves_through_continuation(monkeypatch):
     careful = run_sweep(sweep)
     np.testing.assert_allclose(careful.centerlines, fast.centerlines, atol=1e-6)
     assert careful.iterations[1:].sum() > fast.iterations[1:].sum()
+
+
+def test_twisting_the_end_body_of_a_u_bend_snaps_and_is_reported():
+    """Turning the end fitting's body about the fitting axis twists a planar U-bend until it
+    loses stability and jumps out of its plane: the sweep must see it and say where and how far."""
+    from hoseline import Hose, Mount, Problem
+
+    hose = Hose(length=400.0, outer_diameter=10.0, bending_stiffness=1.5e5, torsional_stiffness=2.5e6, segments=30)
+    problem = Problem(hose, Mount([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]), Mount([0.0, 100.0, 0.0], [1.0, 0.0, 0.0]))
+    twist = Rotation([1.0, 0.0, 0.0], [0.0, 100.0, 0.0], (0.0, 360.0), 24, name="twist")
+    result = run_sweep(SweepProblem(problem, None, "fitting", (generated_motion("fitting", [twist]),), compare_free_roll=False))
+    assert result.snaps, "the loss of stability was not reported"
+    snap = result.snaps[0]
+    assert 0 < snap.pose < 25 and snap.jump > 1.0
+    assert any("stability lost" in event for event in snap.events)
+    # the jump stands out from the ordinary pose-to-pose movement
+    steps = [np.max(np.linalg.norm(b - a, axis=1)) for a, b in zip(result.centerlines[:-1], result.centerlines[1:])]
+    assert snap.jump > 2.0 * np.median(steps)

@@ -57,6 +57,7 @@ class StepControl:
     smallest: float = 1e-4
     tolerance: float = 1e-11
     fast_iterations: int = 4  # a step that converges within this many iterations lets the next one grow
+    largest_correction: float = 0.1  # of the length: a correction of the secant prediction beyond it halves the step
 
 
 def relax_to_stable(
@@ -127,6 +128,10 @@ def follow(
             log.iterations += report.iterations
             trial, report = solve_equilibrium(props, clamps, state, tolerance=control.tolerance)
         log.iterations += report.iterations
+        predicted = previous is not None
+        if report.converged and predicted and dt > 4.0 * control.smallest and _moved_off(props, clamps, guess, trial, control):
+            dt *= 0.5  # Newton went far from the prediction: a smaller step, so no branch is skipped
+            continue
         if not report.converged:
             last_failure = report
             dt *= 0.5
@@ -147,6 +152,12 @@ def follow(
         if report.iterations <= control.fast_iterations:
             dt = min(control.largest, dt * 2.0)
     return state
+
+
+def _moved_off(props: RodProperties, clamps: Clamps, guess: RodState, trial: RodState, control: StepControl) -> bool:
+    """True when the converged shape lies farther from the predicted one than control.largest_correction * L."""
+    moved = node_positions(props, clamps, trial) - node_positions(props, clamps, guess)
+    return float(np.max(np.abs(moved))) > control.largest_correction * props.length
 
 
 def _secant(previous: tuple[float, RodState], current: tuple[float, RodState], t_next: float) -> RodState:
