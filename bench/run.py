@@ -6,7 +6,9 @@ Prints one table (medians over repeated runs, single core) and the shape differe
 - hoseline at 50/100/200 segments: wall time per full placement (straight hose -> placed ->
   twisted 180 deg), Newton iterations, time per iteration;
 - PyElastica and MuJoCo (bench/peers/), 100 elements, driven along the same path as damped
-  dynamics run to rest, when they are installed (`pip install -e .[bench]`);
+  dynamics run to rest (stopped when the shape changes less than 0.01 mm), when they are
+  installed (`pip install -e .[bench]`); each is warmed up first (Numba compilation), then
+  timed --peer-repeats times (median);
 - shape error of each against a fine reference (hoseline at 800 segments), as the largest
   distance between stations at equal arc length; the answer at 180 deg is not unique (two
   mirror images), so each shape is compared with the nearer image.
@@ -74,6 +76,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--no-peers", action="store_true")
+    parser.add_argument("--peer-repeats", type=int, default=3, help="timed runs of each peer (after a warm-up)")
     args = parser.parse_args()
 
     reference = solve(thesis_problem(800), alternatives=True)
@@ -102,7 +105,9 @@ def main() -> None:
             except ImportError as error:
                 peer_rows.append((name, f"not installed ({error.name}); pip install -e .[bench]"))
                 continue
-            outcome = module.run(segments=100, twist_deg=TWIST_DEG, tol_mm=0.01)
+            module.run(segments=10, twist_deg=TWIST_DEG, tol_mm=0.01)  # compile and warm up, as for hoseline
+            runs = [module.run(segments=100, twist_deg=TWIST_DEG, tol_mm=0.01) for _ in range(args.peer_repeats)]
+            outcome = sorted(runs, key=lambda run: run["wall_time"])[len(runs) // 2]  # the median run
             error = shape_error(np.asarray(outcome["centerline"]), references)
             vs_hoseline = shape_error(
                 np.asarray(outcome["centerline"]),

@@ -136,12 +136,12 @@ def twist_rotation(b: float, twist_deg: float, p: HoseProblem = BRAKE_HOSE) -> n
     return rotation_matrix(p.end_mount_direction, b * np.radians(twist_deg))
 
 
-def twist_about_tangent(b: float, twist_deg: float, p: HoseProblem = BRAKE_HOSE) -> float:
+def twist_about_tangent(b: float, twist_deg: float) -> float:
     """The twist rotation expressed as a right-hand roll angle about the end tangent t1 [rad].
 
     t1 = -end mount direction, so a +phi rotation about the mount direction is a -phi roll about t1.
     """
-    return -b * np.radians(twist_deg) * float(np.dot(unit(p.end_mount_direction), -p.end_tangent))
+    return -b * np.radians(twist_deg)
 
 
 def perturbation_direction(p: HoseProblem = BRAKE_HOSE) -> np.ndarray:
@@ -156,6 +156,15 @@ def perturbation_shape(s: np.ndarray, p: HoseProblem = BRAKE_HOSE) -> np.ndarray
     """
     amp = p.perturbation_mm * np.sin(np.pi * np.asarray(s) / p.length)
     return amp[:, None] * perturbation_direction(p)[None, :]
+
+
+def lowest_bending_omega(p: HoseProblem, density: float) -> float:
+    """First bending eigenfrequency [rad/s] of the straight clamped-free hose, 1.875^2 sqrt(EI / (rho A L^4)).
+
+    ``density`` in t/mm^3. The peers scale their time step, damping and ramps with it.
+    """
+    area = np.pi * p.outer_radius**2
+    return 1.8751**2 * np.sqrt(p.bending_stiffness / (density * area * p.length**4))
 
 
 def max_node_shift(a: np.ndarray, b: np.ndarray) -> float:

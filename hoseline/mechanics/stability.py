@@ -55,7 +55,7 @@ def smallest_eigenpairs(band: np.ndarray, jac_t: np.ndarray, count: int = 1, tol
         y = np.linalg.solve(schur, jac_t.T @ h_inv_rhs)
         return h_inv_rhs - h_inv_jt @ y
 
-    block = max(count, negative) + 4
+    block = max(count, negative) + 3
     rng = np.random.default_rng(12345)
     vectors = solve_projected(rng.standard_normal((n, block)))
     values = np.full(block, np.inf)

@@ -50,12 +50,13 @@ class ContinuationLog:
 
 @dataclass(frozen=True)
 class StepControl:
-    """Continuation step sizes (fractions of the path) and the Newton tolerance."""
+    """Continuation step sizes (fractions of the path) and the Newton tolerances (relative residuals)."""
 
     first: float = 0.1
     largest: float = 0.25
     smallest: float = 1e-4
-    tolerance: float = 1e-11
+    tolerance: float = 1e-11  # at the end of each phase
+    path_tolerance: float = 1e-8  # at the intermediate steps (they only carry the path)
     fast_iterations: int = 4  # a step that converges within this many iterations lets the next one grow
     largest_correction: float = 0.1  # of the length: a correction of the secant prediction beyond it halves the step
 
@@ -63,18 +64,28 @@ class StepControl:
 def relax_to_stable(
     props: RodProperties, clamps: Clamps, candidates: list[RodState], log: ContinuationLog
 ) -> tuple[RodState, list[RodState]] | None:
-    """Relax each candidate downhill to an equilibrium; return the stable one of lowest energy
-    and all distinct stable ones found (for reporting non-uniqueness), or None if none is stable."""
+    """Relax the candidates to equilibria; return the stable one of lowest energy and all
+    distinct stable ones found (for reporting non-uniqueness), or None if none is stable.
+
+    Plain Newton from every candidate first; only if none of them ends at a stable state is
+    each walked downhill by the minimising Newton (which cannot stop at a saddle unless the
+    candidate lies exactly on its symmetric ridge).
+    """
     stable: list[tuple[float, RodState]] = []
-    for candidate in candidates:
-        # plain Newton first (cheap); if it ends anywhere but at a stable state, walk downhill
+    downhill: list[RodState] = []
+    for candidate in candidates:  # plain Newton first: cheap, and enough when it ends at a stable state
         state, report = solve_equilibrium(props, clamps, candidate, max_iterations=12)
         log.iterations += report.iterations
-        if not (report.converged and report.unstable_directions == 0):
-            state, report = solve_equilibrium(props, clamps, candidate, minimise=True, max_iterations=80)
-            log.iterations += report.iterations
         if report.converged and report.unstable_directions == 0:
             stable.append((total_energy(props, clamps, state), state))
+        else:
+            downhill.append(candidate)
+    if not stable:  # no candidate settled on a stable state: walk downhill from each
+        for candidate in downhill:
+            state, report = solve_equilibrium(props, clamps, candidate, minimise=True, max_iterations=80)
+            log.iterations += report.iterations
+            if report.converged and report.unstable_directions == 0:
+                stable.append((total_energy(props, clamps, state), state))
     if not stable:
         return None
     stable.sort(key=lambda pair: pair[0])
@@ -91,7 +102,7 @@ def relax_to_stable(
 def push_along_modes(props: RodProperties, clamps: Clamps, state: RodState, count: int) -> list[RodState]:
     """States displaced to both sides along the `count` lowest eigenvectors (0.05 rad at most)."""
     system = evaluate(props, clamps, state)
-    _, vectors = smallest_eigenpairs(system.band, system.jac_t, count=count)
+    _, vectors = smallest_eigenpairs(system.band, system.jac_t, count=count, tolerance=1e-3)  # a direction to push along
     n_rot = 3 * props.segments
     pushed = []
     for j in range(vectors.shape[1]):
@@ -123,10 +134,11 @@ def follow(
         t_next = min(1.0, t + dt)
         clamps = path(t_next)
         guess = state if previous is None else _secant(previous, (t, state), t_next)
-        trial, report = solve_equilibrium(props, clamps, guess, tolerance=control.tolerance)
+        tolerance = control.tolerance if t_next == 1.0 else control.path_tolerance
+        trial, report = solve_equilibrium(props, clamps, guess, tolerance=tolerance)
         if not report.converged and guess is not state:
             log.iterations += report.iterations
-            trial, report = solve_equilibrium(props, clamps, state, tolerance=control.tolerance)
+            trial, report = solve_equilibrium(props, clamps, state, tolerance=tolerance)
         log.iterations += report.iterations
         predicted = previous is not None
         if report.converged and predicted and dt > 4.0 * control.smallest and _moved_off(props, clamps, guess, trial, control):
@@ -173,9 +185,9 @@ def _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, 
     stability, then move to the lowest stable equilibrium next to it."""
     stable_t, stable_state = t, state
     unstable_t, unstable_state = t_next, trial
-    for _ in range(3):  # bracket the crossing (for the report) to 1/8 of the step
+    for _ in range(2):  # bracket the crossing (for the report) to 1/4 of the step
         middle = 0.5 * (stable_t + unstable_t)
-        mid_state, mid_report = solve_equilibrium(props, path(middle), stable_state, tolerance=control.tolerance)
+        mid_state, mid_report = solve_equilibrium(props, path(middle), stable_state, tolerance=control.path_tolerance)
         log.iterations += mid_report.iterations
         if not mid_report.converged:
             break

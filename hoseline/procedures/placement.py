@@ -152,6 +152,7 @@ def solve(
             largest=min(control.largest, math.radians(45.0) / abs(twist)),
             smallest=control.smallest,
             tolerance=control.tolerance,
+            path_tolerance=control.path_tolerance,
             largest_correction=control.largest_correction,
         )
         state = follow("twist", twist_path, props, state, log, control=twist_control, progress=progress)
