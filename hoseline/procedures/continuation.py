@@ -58,7 +58,7 @@ class StepControl:
     tolerance: float = 1e-11  # at the end of each phase
     path_tolerance: float = 1e-8  # at the intermediate steps (they only carry the path)
     fast_iterations: int = 4  # a step that converges within this many iterations lets the next one grow
-    largest_correction: float = 0.1  # of the length: a correction of the secant prediction beyond it halves the step
+    largest_correction: float = 0.3  # of the predicted move: a larger Newton correction halves the step
 
 
 def relax_to_stable(
@@ -141,7 +141,7 @@ def follow(
             trial, report = solve_equilibrium(props, clamps, state, tolerance=tolerance)
         log.iterations += report.iterations
         predicted = previous is not None
-        if report.converged and predicted and dt > 4.0 * control.smallest and _moved_off(props, clamps, guess, trial, control):
+        if report.converged and predicted and dt > 4.0 * control.smallest and _moved_off(props, clamps, state, guess, trial, control):
             dt *= 0.5  # Newton went far from the prediction: a smaller step, so no branch is skipped
             continue
         if not report.converged:
@@ -166,10 +166,17 @@ def follow(
     return state
 
 
-def _moved_off(props: RodProperties, clamps: Clamps, guess: RodState, trial: RodState, control: StepControl) -> bool:
-    """True when the converged shape lies farther from the predicted one than control.largest_correction * L."""
-    moved = node_positions(props, clamps, trial) - node_positions(props, clamps, guess)
-    return float(np.max(np.abs(moved))) > control.largest_correction * props.length
+def _moved_off(
+    props: RodProperties, clamps: Clamps, start: RodState, guess: RodState, trial: RodState, control: StepControl
+) -> bool:
+    """True when Newton's correction of the secant prediction is large: more than
+    control.largest_correction of the predicted move (and more than 1e-3 L).  Near a fork of the
+    path the prediction fails first; a smaller step then keeps the fork from being stepped over."""
+    start_nodes = node_positions(props, clamps, start)
+    guess_nodes = node_positions(props, clamps, guess)
+    correction = float(np.max(np.abs(node_positions(props, clamps, trial) - guess_nodes)))
+    predicted = float(np.max(np.abs(guess_nodes - start_nodes)))
+    return correction > max(control.largest_correction * predicted, 1e-3 * props.length)
 
 
 def _secant(previous: tuple[float, RodState], current: tuple[float, RodState], t_next: float) -> RodState:
