@@ -240,3 +240,19 @@ def test_a_failing_solve_says_where_and_why(monkeypatch):
     monkeypatch.setattr(placement, "relax_to_stable", relax_once)
     with pytest.raises(placement.PlacementError, match=r"phase 'place' failed at fraction 0\.\d+.*residual 3\.20e-03 after 25 iterations"):
         solve(thesis_problem(0.0, 20))
+
+
+def test_a_fork_on_the_twist_path_is_not_stepped_over():
+    """Twisting a U-bend a full turn passes a fork (stability lost near 207 deg).  The default
+    step control must see it, as a fine one does, and land on the same equilibrium."""
+    from hoseline.procedures.continuation import StepControl
+
+    hose = Hose(length=300.0, outer_diameter=10.0, bending_stiffness=1.5e5, torsional_stiffness=2.5e6, segments=50)
+    problem = Problem(hose, Mount([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]), Mount([0.0, 80.0, 0.0], [1.0, 0.0, 0.0]), 360.0)
+    default = solve(problem)
+    fine = solve(problem, control=StepControl(first=0.005, largest=0.005))
+    for result in (default, fine):
+        assert any(event.startswith("twist: stability lost") for event in result.events), result.events
+        assert not result.unique
+    assert default.elastic_energy == pytest.approx(fine.elastic_energy, rel=1e-9)
+    assert np.max(np.abs(default.centerline - fine.centerline)) < 1e-6
