@@ -147,13 +147,10 @@ def solve(
 
     state = RodState(state.frames, state.end_force, 0.0)
     if twist != 0.0:
-        twist_control = StepControl(
+        twist_control = replace(  # steps of at most 30 deg at first, 45 deg later
+            control,
             first=min(control.first, math.radians(30.0) / abs(twist)),
             largest=min(control.largest, math.radians(45.0) / abs(twist)),
-            smallest=control.smallest,
-            tolerance=control.tolerance,
-            path_tolerance=control.path_tolerance,
-            largest_correction=control.largest_correction,
         )
         state = follow("twist", twist_path, props, state, log, control=twist_control, progress=progress)
 
