@@ -76,7 +76,14 @@ def _progress(quiet: bool) -> Iterator[Callable[[str, float], None] | None]:
 
 @contextmanager
 def _errors_to_exit_codes(out_dir: Path) -> Iterator[None]:
-    """Turn the expected failures into one red line and an exit code."""
+    """Turn the expected failures into one red line and an exit code.
+
+    An output path that cannot become a directory (it, or its nearest existing parent, is a
+    file) is refused on entry, before any solving.
+    """
+    existing = next(path for path in (out_dir, *out_dir.parents) if path.exists())
+    if not existing.is_dir():
+        raise _fail(f"cannot write to {out_dir}: {existing} is a file, not a directory; choose another -o", BAD_INPUT)
     try:
         yield
     except placement.PlacementError as exc:

@@ -44,7 +44,12 @@ ONE_SIDED = ScanDefects(noise=0.1, outlier_fraction=0.02, view=(0.2, 0.3, -1.0),
 
 def brake_hose(bending: float, factor: float, segments: int, mass: float = MASS, twist: float = 0.0,
                stiffeners=None) -> Problem:
-    """The thesis brake hose between the appendix A mounts, with the given EI (N*mm^2), torsion factor and weight."""
+    """The thesis brake hose between the appendix A mounts.
+
+    bending: EI, N*mm^2.  factor: GJ over the isotropic EI / 1.5.  segments: of the model.
+    mass: kg/m (under gravity -z when positive).  twist: end fitting, degrees.
+    stiffeners: the thesis' springs (model/stiffeners.py) or None.
+    """
     hose = Hose(length=330.6, outer_diameter=10.1, bending_stiffness=bending, segments=segments,
                 torsional_stiffness=factor * isotropic_torsional_stiffness(bending), mass_per_length=mass,
                 stiffeners=stiffeners)

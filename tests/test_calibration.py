@@ -1,9 +1,10 @@
 """Calibration against synthetic scans made at a finer discretisation than the fit uses."""
 
+import numpy as np
 import pytest
 from validation_cases import EI, FACTOR, RADIUS, brake_hose, scanned
 
-from hoseline.procedures.calibration import ScanCase, calibrate
+from hoseline.procedures.calibration import ScanCase, _relative_std, calibrate
 from hoseline.procedures.centerline_fit import fit_centerline
 
 
@@ -26,6 +27,8 @@ def test_recovers_bending_stiffness_and_torsion_factor_within_5_percent(cases):
     for before, after in zip(calibration.before, calibration.after):
         assert after.mean < 0.5 < before.mean
     assert calibration.warm_solves > 5 * calibration.cold_solves  # Newton from the last equilibria
+    # every model evaluation, the finite-difference Jacobian's included, is one warm or cold solve
+    assert calibration.evaluations == calibration.warm_solves + calibration.cold_solves
 
 
 def test_weightless_hose_refuses_bending_stiffness_and_still_fits_the_torsion_factor(cases):
@@ -47,3 +50,15 @@ def test_a_parameter_the_scans_do_not_see_is_reported_not_identified(cases):
     (factor,) = calibration.parameters
     assert not factor.identifiable and factor.std is None
     assert any("torsion_factor" in note and "not determined" in note for note in calibration.notes)
+
+
+def test_uncertainty_counts_two_degrees_of_freedom_per_station():
+    """Residuals are vectors from each station to its closest model point, normal to the model: their
+    component along the hose is zero, so the residual variance is |r|^2 / (2 stations - parameters)."""
+    rng = np.random.default_rng(3)
+    stations, sigma = 5000, 0.1  # mm of scatter in each direction normal to the hose (here along x)
+    residuals = np.zeros((stations, 3))
+    residuals[:, 1:] = sigma * rng.normal(size=(stations, 2))
+    jacobian = rng.normal(size=(3 * stations, 2)) * [1.0, 30.0]
+    expected = sigma * np.sqrt(np.diag(np.linalg.inv(jacobian.T @ jacobian)))
+    np.testing.assert_allclose(_relative_std(jacobian, residuals.ravel(), 2 * stations), expected, rtol=0.03)

@@ -52,11 +52,24 @@ def test_solver_failure_exits_3_and_writes_nothing(tmp_path, monkeypatch):
     assert not (tmp_path / "out").exists()
 
 
-def test_unwritable_output_exits_2(tmp_path):
+def test_unwritable_output_exits_2_before_solving(tmp_path, monkeypatch):
+    def fail(problem, **options):
+        raise AssertionError("solved although the output cannot be written")
+
+    monkeypatch.setattr(placement, "solve", fail)
     blocker = write(tmp_path / "out", "a file where the output directory should go")
-    code, output = run("solve", write(tmp_path / "brake.toml", THESIS_TOML), "-o", blocker, "--quiet")
-    assert code == cli.BAD_INPUT
-    assert "cannot write to" in output
+    for out in (blocker, blocker / "inner"):
+        code, output = run("solve", write(tmp_path / "brake.toml", THESIS_TOML), "-o", out, "--quiet")
+        assert code == cli.BAD_INPUT, output
+        assert "cannot write to" in output and "is a file, not a directory" in output
+
+
+@pytest.mark.parametrize("command", ["solve", "demo", "sweep", "compare", "calibrate", "validation-demo"])
+def test_every_command_has_help(command):
+    code, output = run(command, "--help")
+    assert code == 0 and "--out" in output
+    if command == "sweep":
+        assert "[[bodies]]" in output  # not eaten as console markup
 
 
 def test_solve_writes_centerline_and_result(tmp_path):

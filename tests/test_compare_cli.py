@@ -60,16 +60,24 @@ def test_check_exits_5_when_a_limit_is_exceeded(tmp_path):
 def test_bad_inputs_exit_2_and_write_nothing(tmp_path):
     problem, scans = files(tmp_path)
     (tmp_path / "broken.xyz").write_text("1 2 3\n" * 30 + "1 2\n")
+    (tmp_path / "rod.xyz").write_text("".join(f"0 0 {z}\n" for z in range(30)))
     for args, fragment in [
         ((problem, tmp_path / "broken.xyz"), "line 31"),
         ((problem, tmp_path / "missing.ply"), "cannot read scan"),
+        ((problem, scans[0], "--reference-points", tmp_path / "missing.csv"), "cannot read reference points"),
+        ((problem, tmp_path / "rod.xyz"), f"scan {tmp_path / 'rod.xyz'}: "),
         ((problem, *scans, "--twist", 0, "--twist", 90, "--twist", 180), "once per scan"),
+        ((problem, scans[0], "--twist", "nan"), "--twist nan: give a finite angle"),
+        ((problem, scans[0], "--max-mean", -1), "--max-mean -1.0: give a positive limit"),
+        ((problem, scans[0], "--max-deviation", "nan"), "--max-deviation nan: give a positive limit"),
     ]:
         code, output = run("compare", *args, "-o", tmp_path / "out")
         assert code == cli.BAD_INPUT, output
         assert fragment in output
     code, output = run("calibrate", problem, *scans, "--fit", "stiffness", "-o", tmp_path / "out")
     assert code == cli.BAD_INPUT and "unknown parameter 'stiffness'" in output
+    code, output = run("calibrate", problem, *scans, "--fit", "", "-o", tmp_path / "out")
+    assert code == cli.BAD_INPUT and "no parameter given" in output
     assert not (tmp_path / "out").exists()
 
 

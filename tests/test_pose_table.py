@@ -24,6 +24,17 @@ def test_quaternions_are_scalar_first_and_rotate_body_into_world():
     np.testing.assert_allclose(matrix_quaternion(rotation), [HALF, 0.0, 0.0, HALF], atol=1e-15)
 
 
+def test_quaternion_of_half_turns_and_near_half_turns():
+    """matrix_quaternion's branches for a non-positive trace (turns of about 180 degrees about any axis)."""
+    rng = np.random.default_rng(1)
+    for angle in (math.pi, math.pi - 1e-3, 0.9 * math.pi, 2.2):
+        for axis in (*np.eye(3), *rng.normal(size=(5, 3))):
+            axis = axis / np.linalg.norm(axis)
+            q = np.concatenate([[math.cos(0.5 * angle)], math.sin(0.5 * angle) * axis])
+            np.testing.assert_allclose(quaternion_matrix(matrix_quaternion(quaternion_matrix(q))), quaternion_matrix(q),
+                                       atol=1e-12)
+
+
 def test_columns_are_found_by_name_scalar_first_or_last(tmp_path):
     first = read_pose_table(write(tmp_path, "jounce [mm], x, y, z, qw, qx, qy, qz\n0, 1, 2, 3, 0.7071067811865476, 0, 0, 0.7071067811865476\n"), "k")
     last = read_pose_table(write(tmp_path, "jounce [mm], x, y, z, qx, qy, qz, qw\n0, 1, 2, 3, 0, 0, 0.7071067811865476, 0.7071067811865476\n"), "k")
@@ -75,3 +86,10 @@ def test_bad_tables_name_line_and_column(tmp_path, text, fragments):
         read_pose_table(write(tmp_path, text), "knuckle")
     for fragment in fragments:
         assert fragment in str(error.value)
+
+
+def test_a_table_that_is_not_utf8_is_refused_with_the_line(tmp_path):
+    path = tmp_path / "poses.csv"
+    path.write_bytes((HEADER + "0, 0, 0, 0, 1, 0, 0, 0\n# r\xe9f\xe9rence\n").encode("latin-1"))
+    with pytest.raises(PoseTableError, match=r"line 3: not UTF-8 text"):
+        read_pose_table(path, "knuckle")

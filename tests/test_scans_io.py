@@ -53,6 +53,12 @@ def test_stl_vertices_ascii_and_binary_are_merged(tmp_path):
     ("scan.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float u\nend_header\n1\n", ["no x, y, z"]),
     ("scan.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 99\nproperty float x\nproperty float y\n"
                  "property float z\nend_header\n", ["99 vertices", "too short"]),
+    ("scan.ply", "ply\nformat ascii 1.0\nelement vertex many\nend_header\n", ["header line 3", "whole number"]),
+    ("scan.ply", "ply\nformat\nelement vertex 1\nend_header\n", ["header line 2", "incomplete"]),
+    ("scan.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                 "end_header\n1 2 3\n4 5\n", ["line 9", "'4 5' is not 3 numbers"]),
+    ("scan.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                 "end_header", ["2 vertices", "fewer lines"]),
 ])
 def test_bad_scans_are_refused_with_the_place_and_the_fix(tmp_path, name, content, fragments):
     (tmp_path / name).write_text(content)

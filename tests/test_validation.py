@@ -12,7 +12,7 @@ from hoseline.procedures.twist_path import follow_twist
 
 def test_centerline_and_radius_from_a_one_sided_noisy_scan_with_a_gap():
     truth, points = scanned(180.0)
-    fit = fit_centerline(points, RADIUS, start_hint=truth.problem.start.point)
+    fit = fit_centerline(points.tolist(), RADIUS, start_hint=truth.problem.start.point)  # any (n, 3) array-like
     error = deviation(truth.centerline, fit.points)
     assert error.max < 0.3 and error.mean < 0.12  # noise 0.1 mm, 2 % stray points, half the surface seen
     assert abs(fit.radius_median - RADIUS) < 0.03 and fit.radius_scatter < 0.05

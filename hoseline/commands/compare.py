@@ -11,6 +11,7 @@ deviation is above its thresholds.  On an error nothing is written.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -26,6 +27,7 @@ from hoseline.procedures.calibration import PARAMETERS, ScanCase, calibrate
 from hoseline.procedures.centerline_fit import fit_centerline
 from hoseline.procedures.deviation import Thresholds
 from hoseline.procedures.placement import solve
+from hoseline.procedures.result import Result
 from hoseline.procedures.scatter import scatter_envelope
 from hoseline.procedures.validation import Comparison, compare_scan
 from hoseline.report.validation import write_validation_report
@@ -54,15 +56,17 @@ def compare_command(
     """Compare the placed model with scans: deviation table and plot, 3D overlay, scatter of repeated scans."""
     problem = _load_problem(problem_file)
     twists = _twists(twist, len(scans), problem)
+    max_mean, max_deviation = _limit(max_mean, "--max-mean"), _limit(max_deviation, "--max-deviation")
     clouds = [_load_scan(path) for path in scans]
-    references = None if reference_points is None else _load_scan(reference_points, min_points=1)
+    references = None if reference_points is None else _load_scan(reference_points, "reference points", min_points=1)
     with _errors_to_exit_codes(out):
+        fits = [_fitted(cloud, problem, path) for cloud, path in zip(clouds, scans)]
+        placed = _placed(problem, twists)
         comparisons = []
-        for path, cloud, angle in zip(scans, clouds, twists):
-            result = solve(replace(problem, end_twist_deg=angle))
-            limits = Thresholds.thesis(angle)
-            limits = Thresholds(max_mean if max_mean is not None else limits.mean, max_deviation)
-            comparisons.append(_compared(result, cloud, path.stem, limits, references))
+        for path, cloud, angle, f in zip(scans, clouds, twists, fits):
+            limits = Thresholds(Thresholds.thesis(angle).mean if max_mean is None else max_mean, max_deviation)
+            comparisons.append(compare_scan(placed[angle], cloud, path.stem, fit=f, thresholds=limits,
+                                            reference_points=references))
         write_validation_report(out, comparisons, envelope=_envelope(comparisons, twists))
     if not quiet:
         Console().print(_deviation_table(comparisons))
@@ -86,14 +90,16 @@ def calibrate_command(
     twists = _twists(twist, len(scans), problem)
     names = [name.strip() for name in fit.split(",") if name.strip()]
     unknown = [name for name in names if name not in PARAMETERS]
-    if unknown:
-        raise _fail(f"--fit {fit}: unknown parameter {unknown[0]!r}; choose from {', '.join(PARAMETERS)}", BAD_INPUT)
+    if unknown or not names:
+        reason = f"unknown parameter {unknown[0]!r}" if unknown else "no parameter given"
+        raise _fail(f"--fit {fit!r}: {reason}; choose from {', '.join(PARAMETERS)}", BAD_INPUT)
     clouds = [_load_scan(path) for path in scans]
     with _errors_to_exit_codes(out):
         fits = [_fitted(cloud, problem, path) for cloud, path in zip(clouds, scans)]
         calibration = calibrate(problem, [ScanCase(angle, f.points) for angle, f in zip(twists, fits)], names)
         calibrated = replace(problem, hose=calibration.hose)
-        comparisons = [compare_scan(solve(replace(calibrated, end_twist_deg=angle)), cloud, path.stem, fit=f)
+        placed = _placed(calibrated, twists)
+        comparisons = [compare_scan(placed[angle], cloud, path.stem, fit=f)
                        for path, cloud, angle, f in zip(scans, clouds, twists, fits)]
         write_validation_report(out, comparisons, calibration=calibration,
                                 extra_files={"calibrated.toml": problem_to_toml(calibrated)})
@@ -133,14 +139,18 @@ def _load_problem(path: Path) -> Problem:
     return _read_input(load_problem, path, "problem file", (ProblemFileError,))
 
 
-def _load_scan(path: Path, min_points: int = 20):
-    return _read_input(read_scan, path, "scan", (ScanFileError,), min_points)
+def _load_scan(path: Path, what: str = "scan", min_points: int = 20):
+    """The points of a scan file (mm); what: "scan" or "reference points", for the message."""
+    return _read_input(read_scan, path, what, (ScanFileError,), min_points)
 
 
 def _twists(given: list[float] | None, count: int, problem: Problem) -> list[float]:
-    """One twist per scan: as given, one for all, or the problem's."""
+    """One twist per scan, degrees: as given, one for all, or the problem's."""
     if not given:
         return [problem.end_twist_deg] * count
+    bad = [angle for angle in given if not math.isfinite(angle)]
+    if bad:
+        raise _fail(f"--twist {bad[0]}: give a finite angle in degrees", BAD_INPUT)
     if len(given) == 1:
         return list(given) * count
     if len(given) != count:
@@ -156,11 +166,16 @@ def _fitted(cloud, problem: Problem, path: Path):
         raise _fail(f"scan {path}: {exc}", BAD_INPUT) from None
 
 
-def _compared(result, cloud, label: str, limits: Thresholds, references) -> Comparison:
-    try:
-        return compare_scan(result, cloud, label, thresholds=limits, reference_points=references)
-    except ValueError as exc:
-        raise _fail(f"scan {label}: {exc}", BAD_INPUT) from None
+def _limit(value: float | None, option: str) -> float | None:
+    """A deviation limit option (mm): None, or positive and finite (else exit 2)."""
+    if value is not None and not (math.isfinite(value) and value > 0.0):
+        raise _fail(f"{option} {value}: give a positive limit in mm", BAD_INPUT)
+    return value
+
+
+def _placed(problem: Problem, twists: list[float]) -> dict[float, Result]:
+    """The problem placed at each distinct twist (degrees): scans at the same twist share one solve."""
+    return {angle: solve(replace(problem, end_twist_deg=angle)) for angle in dict.fromkeys(twists)}
 
 
 def _envelope(comparisons: list[Comparison], twists: list[float]):

@@ -23,7 +23,7 @@ from hoseline.sweep_demo import demo_sweep
 
 @app.command("sweep")
 def sweep_command(
-    sweep_file: Path = typer.Argument(None, help="TOML sweep file: a problem file with [[bodies]] and [[obstacles]] "
+    sweep_file: Path = typer.Argument(None, help="TOML sweep file: a problem file with [\\[bodies]] and [\\[obstacles]] "
                                                  "(see docs/sweep.md)"),
     out: Path = typer.Option(..., "-o", "--out", help=OUT_HELP),
     demo: bool = typer.Option(False, "--demo", help="run the built-in demo (thesis hose, steer and jounce, a strut)"),

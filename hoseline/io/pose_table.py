@@ -20,6 +20,7 @@ Format: one header line, then one row per pose, in the order of the sweep::
 from __future__ import annotations
 
 import csv
+import io
 import math
 import re
 from pathlib import Path
@@ -42,9 +43,13 @@ def read_pose_table(path: str | Path, body: str) -> BodyMotion:
     Raises PoseTableError naming the line and column of bad input; OSError if unreadable.
     """
     path = Path(path)
-    with path.open(newline="", encoding="utf-8-sig") as stream:
-        rows = [(number, row) for number, row in enumerate(csv.reader(stream), start=1)
-                if row and any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")]
+    try:
+        text = path.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = exc.object[: exc.start].count(b"\n") + 1
+        raise PoseTableError(f"{path} line {line}: not UTF-8 text; save the table as UTF-8 (or plain ASCII) CSV") from None
+    rows = [(number, row) for number, row in enumerate(csv.reader(io.StringIO(text, newline="")), start=1)
+            if row and any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")]
     if not rows:
         raise PoseTableError(f"{path}: empty; expected a header line such as 'travel [mm], {', '.join(POSE_COLUMNS)}'")
     header_line, header = rows[0]

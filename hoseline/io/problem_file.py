@@ -302,29 +302,41 @@ def _path(loc: tuple) -> str:
     return text
 
 
-def _section_model(loc: tuple) -> type[BaseModel] | None:
-    """The model class for the table at `loc` (for listing its keys)."""
-    model: type[BaseModel] = ProblemFile
+def _inner_model(annotation) -> type[BaseModel] | None:
+    """The model class in an annotation such as Model, list[Model] or Model | None (None if there is none)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for argument in typing.get_args(annotation):
+        found = _inner_model(argument)
+        if found is not None:
+            return found
+    return None
+
+
+def _section_model(model: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
+    """The model class of the table at `loc` below `model` (None if `loc` is a plain value).
+
+    List positions (ints, as in bodies[0]) stay in the model of the list's items.
+    """
     for part in loc:
-        field = model.model_fields.get(part) if isinstance(part, str) else None
-        annotation = field.annotation if field else None
-        if typing.get_origin(annotation) is not None:  # `Section | None`: the section
-            annotation = next((a for a in typing.get_args(annotation) if a is not type(None)), None)
-        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
+        if isinstance(part, int):
+            continue
+        field = model.model_fields.get(part)
+        model = _inner_model(field.annotation) if field else None
+        if model is None:
             return None
-        model = annotation
     return model
 
 
-def _unknown_key(loc: tuple) -> str:
-    """Name the unknown key and suggest the nearest known one (or list them)."""
-    key = str(loc[-1])
-    model = _section_model(loc[:-1])
-    known = list(model.model_fields) if model else []
-    prefix = _path(loc[:-1]) + "." if loc[:-1] else ""
-    close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
-    hint = f"did you mean '{prefix}{close[0]}'?" if close else "allowed keys: " + ", ".join(known)
-    return f"unknown key '{_path(loc)}': {hint}"
+def _unknown_key(model: type[BaseModel], loc: tuple, prefix: tuple = ()) -> str:
+    """Name the unknown key at `loc` below `model` (which sits at `prefix` in the file) and suggest
+    the nearest known one (or list them)."""
+    section = _section_model(model, loc[:-1])
+    known = list(section.model_fields) if section else []
+    table = _path(prefix + loc[:-1])
+    close = difflib.get_close_matches(str(loc[-1]), known, n=1, cutoff=0.6)
+    hint = f"did you mean '{table + '.' if table else ''}{close[0]}'?" if close else "allowed keys: " + ", ".join(known)
+    return f"unknown key '{_path(prefix + loc)}': {hint}"
 
 
 _TYPE_REASONS = {
@@ -335,25 +347,26 @@ _TYPE_REASONS = {
 }
 
 
-def _message(error: dict) -> str:
-    """One pydantic error as 'field = value: reason'."""
+def _message(error: dict, model: type[BaseModel], prefix: tuple = ()) -> str:
+    """One pydantic error of `model` (which sits at `prefix` in the file) as 'field = value: reason'."""
     loc, kind, value = tuple(error["loc"]), error["type"], error.get("input")
+    path = _path(prefix + loc)
     if kind == "extra_forbidden":
-        return _unknown_key(loc)
+        return _unknown_key(model, loc, prefix)
     if kind == "missing":
-        if _section_model(loc):
-            return f"missing table [{_path(loc)}]"
+        if _section_model(model, loc):
+            return f"missing table [{path}]"
         unit = _UNITS.get(str(loc[-1]))
-        return f"missing key '{_path(loc)}'" + (f" ({unit})" if unit else "")
+        return f"missing key '{path}'" + (f" ({unit})" if unit else "")
     if kind == "model_type":
-        return f"{_path(loc)} = {_show(value)}: must be a table [{_path(loc)}] with its keys below it"
+        return f"{path} = {_show(value)}: must be a table [{path}] with its keys below it"
     if kind == "value_error":
         reason = str(error["ctx"]["error"])
         if isinstance(value, dict):  # a rule across several keys: the message names them itself
             return reason
     else:
         reason = _TYPE_REASONS.get(kind, error["msg"])
-    return f"{_path(loc)} = {_show(value)}: {reason}"
+    return f"{path} = {_show(value)}: {reason}"
 
 
 def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | None = None) -> Problem:
@@ -393,16 +406,17 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
         raise ProblemFileError(f"{source}: {exc}") from None
 
 
-def _validated(model: type[BaseModel], data: Any, source: str, loc: tuple = ()) -> Any:
-    """`model` validated from `data` (found at `loc` in the file), or ProblemFileError with the first problem."""
+def _validated(
+    model: type[BaseModel], data: Any, source: str, loc: tuple = (), error: type[ValueError] = ProblemFileError
+) -> Any:
+    """`model` validated from `data` (found at `loc` in the file), or `error` with the first problem."""
     try:
         return model.model_validate(data)
     except pydantic.ValidationError as exc:
         # an unknown key first: a misspelt key also shows up as a missing one
-        errors = sorted(exc.errors(), key=lambda error: error["type"] != "extra_forbidden")
+        errors = sorted(exc.errors(), key=lambda item: item["type"] != "extra_forbidden")
         more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
-        first = {**errors[0], "loc": loc + tuple(errors[0]["loc"])}
-        raise ProblemFileError(f"{source}: {_message(first)}{more}") from None
+        raise error(f"{source}: {_message(errors[0], model, loc)}{more}") from None
 
 
 def _with_mounts_from_iges(data: dict, source: str, base_dir: Path) -> dict:

@@ -91,16 +91,20 @@ def _read_ply(data: bytes, source: str) -> np.ndarray:
     end = data.find(b"end_header")
     if not data.startswith(b"ply") or end < 0:
         raise ScanFileError(f"{source}: not a PLY file (it must start with 'ply' and have an 'end_header' line)")
-    body_start = data.index(b"\n", end) + 1
+    body_start = data.find(b"\n", end) + 1 or len(data)
     header = data[:end].decode("ascii", errors="replace").splitlines()
     fmt, elements = None, []  # elements: [name, count, [(property, dtype or None for lists)]]
     for number, line in enumerate(header, start=1):
         words = line.split()
         if not words or words[0] in ("comment", "obj_info", "ply"):
             continue
+        if len(words) < {"format": 2, "element": 3, "property": 3}.get(words[0], 1):
+            raise ScanFileError(f"{source}, header line {number}: '{line.strip()}' is incomplete")
         if words[0] == "format":
             fmt = words[1]
         elif words[0] == "element":
+            if not words[2].isdigit():
+                raise ScanFileError(f"{source}, header line {number}: '{line.strip()}': the count must be a whole number")
             elements.append([words[1], int(words[2]), []])
         elif words[0] == "property" and elements:
             if words[1] == "list":
@@ -121,12 +125,19 @@ def _read_ply(data: bytes, source: str) -> np.ndarray:
         raise ScanFileError(f"{source}: list properties on PLY vertices are not supported; export x, y, z only")
     if fmt == "ascii":
         lines = data[body_start:].decode("ascii", errors="replace").split("\n")[:count]
-        try:
-            table = np.array([[float(v) for v in line.split()[: len(names)]] for line in lines], dtype=float)
-        except ValueError:
-            raise ScanFileError(f"{source}: a PLY vertex line is not {len(names)} numbers") from None
-        if table.shape != (count, len(names)):
-            raise ScanFileError(f"{source}: the header announces {count} vertices of {len(names)} values; the file has fewer")
+        if len(lines) < count or (count and not lines[-1].strip()):
+            raise ScanFileError(f"{source}: the header announces {count} vertices; the file has fewer lines")
+        first_line = data[:body_start].count(b"\n") + 1
+        table = np.empty((count, len(names)))
+        for index, line in enumerate(lines):
+            try:
+                row = [float(v) for v in line.split()[: len(names)]]
+            except ValueError:
+                row = []
+            if len(row) != len(names):
+                raise ScanFileError(f"{source}, line {first_line + index}: '{line.strip()[:60]}' is not "
+                                    f"{len(names)} numbers ({', '.join(names)})")
+            table[index] = row
         columns = {name: table[:, i] for i, name in enumerate(names)}
     else:
         order = "<" if fmt == "binary_little_endian" else ">"

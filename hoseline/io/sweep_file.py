@@ -34,19 +34,24 @@ stages of the same name move the same coordinate (see model/motion.generated_mot
 
 from __future__ import annotations
 
-import difflib
 import math
-import typing
 from pathlib import Path
 from typing import Annotated
 
-import pydantic
 from pydantic import AfterValidator, Field, model_validator
 
-from hoseline.io import problem_file
 from hoseline.io.obstacle_mesh import ObstacleFileError, read_mesh
 from hoseline.io.pose_table import PoseTableError, read_pose_table
-from hoseline.io.problem_file import Direction, ProblemFileError, Vector, _Section, problem_from_dict, read_toml
+from hoseline.io.problem_file import (
+    Direction,
+    ProblemFileError,
+    Vector,
+    _not_negative,
+    _Section,
+    _validated,
+    problem_from_dict,
+    read_toml,
+)
 from hoseline.model.motion import BodyMotion, Rotation, Translation, generated_motion
 from hoseline.model.sweep import DEFAULT_CLEARANCE, Obstacle, SweepProblem
 
@@ -66,12 +71,6 @@ def _range(value: list[float]) -> list[float]:
 def _at_least_one(value: int) -> int:
     if value < 1:
         raise ValueError("must be at least 1")
-    return value
-
-
-def _not_negative(value: float) -> float:
-    if not (math.isfinite(value) and value >= 0.0):
-        raise ValueError("must be zero or positive (mm)")
     return value
 
 
@@ -128,7 +127,7 @@ class ObstacleSection(_Section):
 
     name: str | None = None
     file: str
-    clearance: Annotated[float, AfterValidator(_not_negative)] = DEFAULT_CLEARANCE
+    clearance: Annotated[float, _not_negative("mm")] = DEFAULT_CLEARANCE
     body: str | None = None
 
 
@@ -138,14 +137,20 @@ class SweepSection(_Section):
     compare_free_roll: bool = True
 
 
+class MountBody(_Section):
+    """[start] body and [end] body: the body the fitting moves with."""
+
+    body: str
+
+
 class SweepTables(_Section):
     """The tables a sweep file adds to a problem file."""
 
     bodies: list[BodySection]
     obstacles: list[ObstacleSection] = Field(default_factory=list)
     sweep: SweepSection = Field(default_factory=SweepSection)
-    start_body: str | None = None
-    end_body: str | None = None
+    start: MountBody | None = None
+    end: MountBody | None = None
 
 
 def load_sweep(path: str | Path) -> SweepProblem:
@@ -171,7 +176,7 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
                 problem_part[role] = rest
             else:  # only the body: the mount itself comes from elsewhere (e.g. [mounts] iges)
                 del problem_part[role]
-            sweep_part[f"{role}_body"] = table["body"]
+            sweep_part[role] = {"body": table["body"]}
     if "bodies" not in sweep_part:
         raise SweepFileError(
             f"{source}: missing [[bodies]]: a sweep needs at least one moving body, with poses = \"table.csv\" "
@@ -183,14 +188,14 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
         raise
     except ProblemFileError as exc:
         raise SweepFileError(str(exc)) from None
-    tables = _validated(sweep_part, source)
+    tables = _validated(SweepTables, sweep_part, source, error=SweepFileError)
     motions = tuple(_motion(body, base, source) for body in tables.bodies)
     obstacles = tuple(_obstacle(item, base, source) for item in tables.obstacles)
     try:
         return SweepProblem(
             problem=problem,
-            start_body=tables.start_body,
-            end_body=tables.end_body,
+            start_body=tables.start.body if tables.start else None,
+            end_body=tables.end.body if tables.end else None,
             motions=motions,
             obstacles=obstacles,
             compare_free_roll=tables.sweep.compare_free_roll,
@@ -227,45 +232,3 @@ def _obstacle(item: ObstacleSection, base: Path, source: str) -> Obstacle:
     except OSError as exc:
         raise SweepFileError(f"{source}: obstacle {name!r}: file = \"{item.file}\": cannot read {file}: {exc.strerror or exc}") from None
     return Obstacle(name, vertices, faces, item.clearance, item.body, source=str(item.file))
-
-
-def _validated(data: dict, source: str) -> SweepTables:
-    """The sweep tables validated, or SweepFileError with the first problem in problem_file's words."""
-    try:
-        return SweepTables.model_validate(data)
-    except pydantic.ValidationError as exc:
-        errors = sorted(exc.errors(), key=lambda error: error["type"] != "extra_forbidden")
-        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
-        error = errors[0]
-        loc = tuple(error["loc"])
-        if loc and loc[0] in ("start_body", "end_body"):  # written as [start] body, [end] body
-            loc = (loc[0].split("_")[0], "body") + loc[1:]
-            error = {**error, "loc": loc}
-        if error["type"] == "extra_forbidden":
-            message = _unknown_key(loc)
-        else:
-            message = problem_file._message(error)
-        raise SweepFileError(f"{source}: {message}{more}") from None
-
-
-def _unknown_key(loc: tuple) -> str:
-    """Name an unknown key of the sweep tables and suggest the nearest known one."""
-    model = SweepTables
-    for part in loc[:-1]:
-        if isinstance(part, str):  # list positions (int) stay in the same model
-            model = _inner_model(model.model_fields[part].annotation)
-    known = [name for name in model.model_fields if not name.endswith("_body")]
-    close = difflib.get_close_matches(str(loc[-1]), known, n=1, cutoff=0.6)
-    hint = f"did you mean '{close[0]}'?" if close else "allowed keys: " + ", ".join(known)
-    return f"unknown key '{problem_file._path(loc)}': {hint}"
-
-
-def _inner_model(annotation) -> type[pydantic.BaseModel] | None:
-    """The model class in an annotation such as Model, list[Model] or Model | None."""
-    if isinstance(annotation, type) and issubclass(annotation, pydantic.BaseModel):
-        return annotation
-    for argument in typing.get_args(annotation):
-        found = _inner_model(argument)
-        if found is not None:
-            return found
-    return None

@@ -159,6 +159,7 @@ class Rotation:
         return Pose(rotation, point - rotation @ point)
 
     def values(self) -> np.ndarray:
+        """(steps + 1,) the stage's angles, degrees."""
         return np.linspace(self.angles_deg[0], self.angles_deg[1], self.steps + 1)
 
 
@@ -180,6 +181,7 @@ class Translation:
         return Pose(np.eye(3), value * unit_vector(self.axis, f"{self.name}.axis"))
 
     def values(self) -> np.ndarray:
+        """(steps + 1,) the stage's distances along the axis, mm."""
         return np.linspace(self.distances[0], self.distances[1], self.steps + 1)
 
 

@@ -70,6 +70,7 @@ class SweepProblem:
 
     @property
     def pose_count(self) -> int:
+        """Number of poses M of the sweep."""
         return len(self.motions[0].poses)
 
     @property
@@ -79,6 +80,7 @@ class SweepProblem:
 
     @property
     def stages(self) -> tuple[Stage, ...]:
+        """The stages of the travel axis (from the first moving body)."""
         return self.motions[0].stages
 
     def pose(self, body: str | None, index: int) -> Pose:

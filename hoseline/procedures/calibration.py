@@ -186,7 +186,9 @@ def calibrate(
 
     problem: the hose and mounts, with the initial values (its twist is ignored: each case
     has its own).  cases: scans of the same hose in the same mounts at various twists.
-    max_evaluations: model evaluations allowed (each solves every case).
+    max_evaluations: evaluations allowed to the least-squares iterations (each solves every
+    case); the finite-difference Jacobian costs one more evaluation per fitted parameter and
+    is not counted here (scipy's max_nfev).
     """
     names, notes = identifiable_parameters(problem, list(fit))
     model = WarmStartedModel(problem, [case.twist_deg for case in cases])
@@ -210,7 +212,8 @@ def calibrate(
 
     solution = least_squares(residuals, np.zeros(len(names)), bounds=(-LOG_BOUND, LOG_BOUND), x_scale=1.0,
                              diff_step=1e-4, max_nfev=max_evaluations)
-    relative_std = _relative_std(solution.jac, solution.fun, len(names))
+    # each residual vector is normal to the model centreline (closest point): two degrees of freedom per station
+    relative_std = _relative_std(solution.jac, solution.fun, 2 * station_count)
     parameters = []
     for name, x, std in zip(names, solution.x, relative_std):
         value = initial[name] * math.exp(x)
@@ -222,13 +225,17 @@ def calibrate(
                                           value * std if identified else None, identified, note))
     hose = hose_at(solution.x)
     after = [deviation(line, case.points) for line, case in zip(model.centerlines(hose), cases)]
-    return Calibration(parameters, hose, before, after, notes, int(solution.nfev) + 2,
+    return Calibration(parameters, hose, before, after, notes, model.warm_solves + model.cold_solves,
                        model.warm_solves, model.cold_solves)
 
 
-def _relative_std(jacobian: np.ndarray, residuals: np.ndarray, count: int) -> np.ndarray:
-    """Standard uncertainty of each log-parameter from s^2 (J^T J)^-1 (infinite where J is singular)."""
-    dof = max(residuals.size - count, 1)
+def _relative_std(jacobian: np.ndarray, residuals: np.ndarray, observations: int) -> np.ndarray:
+    """Standard uncertainty of each log-parameter from s^2 (J^T J)^-1 (infinite where J is singular).
+
+    observations: independent components among the residuals; s^2 = |r|^2 / (observations - parameters).
+    """
+    count = jacobian.shape[1]
+    dof = max(observations - count, 1)
     variance = float(residuals @ residuals) / dof
     _, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
     if singular[0] == 0.0:

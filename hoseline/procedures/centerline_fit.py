@@ -99,7 +99,8 @@ def fit_centerline(
         raise ValueError(f"nominal radius = {nominal_radius!r}: give the hose's outer radius in mm")
     section = 4.0 * nominal_radius if section is None else section
     spacing = nominal_radius if spacing is None else spacing
-    clean = _drop_outliers(np.asarray(points, dtype=float))
+    points = np.asarray(points, dtype=float)
+    clean = _drop_outliers(points)
     guide = _guide_from_axis_points(_axis_candidates(clean, nominal_radius), nominal_radius, spacing)
     if start_hint is not None and np.linalg.norm(guide[-1] - start_hint) < np.linalg.norm(guide[0] - start_hint):
         guide = guide[::-1]

@@ -85,22 +85,6 @@ class TriangleIndex:
         return Proximity(distance - outer_radius, s, on_hose, on_obstacle, int(self.order[position]))
 
 
-def brute_force_nearest(nodes: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> float:
-    """Centreline-to-mesh distance (mm) by testing every segment against every triangle (for tests)."""
-    corners = np.ascontiguousarray(np.asarray(vertices, dtype=float)[np.asarray(faces)])
-    return float(_brute_force(np.ascontiguousarray(nodes, dtype=float), corners))
-
-
-@njit(cache=True)
-def _brute_force(nodes, triangles):
-    best = math.inf
-    for i in range(nodes.shape[0] - 1):
-        for t in range(triangles.shape[0]):
-            d, _, _ = segment_triangle_distance(_point(nodes, i), _point(nodes, i + 1), *_corners(triangles, t))
-            best = min(best, d)
-    return best
-
-
 @njit(cache=True)
 def _build(tri_lower, tri_upper, centroids, leaf_size):
     """Top-down median split on the longest axis of the centroids' box.

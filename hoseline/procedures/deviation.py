@@ -73,14 +73,17 @@ class Deviation:
 
     @property
     def mean(self) -> float:
+        """Mean distance, mm."""
         return float(np.mean(self.distance))
 
     @property
     def rms(self) -> float:
+        """Root-mean-square distance, mm."""
         return float(np.sqrt(np.mean(self.distance**2)))
 
     @property
     def max(self) -> float:
+        """Largest distance, mm."""
         return float(np.max(self.distance))
 
     @property

@@ -45,9 +45,11 @@ class ScatterEnvelope:
 
     @property
     def s_at_max_spread(self) -> float:
+        """Arc length along the mean centreline where the scans spread most, mm."""
         return float(self.s[int(np.argmax(self.spread))])
 
     def summary(self) -> dict:
+        """Scan count, margin, largest spread and where, mm."""
         return {"scans": self.scans, "margin_mm": self.margin, "max_spread_mm": self.max_spread,
                 "s_at_max_spread_mm": self.s_at_max_spread}
 

@@ -104,6 +104,7 @@ class SweepResult:
 
     @property
     def pose_count(self) -> int:
+        """Number of poses M."""
         return int(self.centerlines.shape[0])
 
     @property

@@ -56,10 +56,8 @@ def plot_shapes(results: Sequence[Result], labels: Sequence[str], path_png: str 
 
     arrow_tips = [m.point + arrow * m.direction for r in results for m in (r.problem.start, r.problem.end)]
     _finish_3d(axes_3d, np.vstack([r.centerline for r in results] + arrow_tips))
-    for axes, (title, i, j) in zip(views, VIEWS):
-        axes.set(title=title, xlabel=f"{AXIS_NAMES[i]} [mm]", ylabel=f"{AXIS_NAMES[j]} [mm]")
-        axes.set_aspect("equal", adjustable="datalim")
-        axes.grid(True, alpha=0.3)
+    for axes, view in zip(views, VIEWS):
+        finish_view(axes, *view)
     _mark_bend_limit(axes_curvature, results[0])
     axes_curvature.set(title="curvature along the hose", xlabel="s [mm]", ylabel="curvature [1/mm]")
     axes_torque.set(title="twisting moment along the hose", xlabel="s [mm]", ylabel="twisting moment [N*mm]")
@@ -67,9 +65,21 @@ def plot_shapes(results: Sequence[Result], labels: Sequence[str], path_png: str 
         axes.grid(True, alpha=0.3)
         axes.legend()
 
+    return write_bytes(path_png, png_bytes(figure, dpi=100))
+
+
+def finish_view(axes, title: str, i: int, j: int) -> None:
+    """Title, axis labels (mm), equal scale and grid of an orthographic view: coordinate i across, j up."""
+    axes.set(title=title, xlabel=f"{AXIS_NAMES[i]} [mm]", ylabel=f"{AXIS_NAMES[j]} [mm]")
+    axes.set_aspect("equal", adjustable="datalim")
+    axes.grid(True, alpha=0.3)
+
+
+def png_bytes(figure: Figure, dpi: int = 90) -> bytes:
+    """The figure as PNG file content."""
     buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=100)
-    return write_bytes(path_png, buffer.getvalue())
+    figure.savefig(buffer, format="png", dpi=dpi)
+    return buffer.getvalue()
 
 
 def _draw_mount(axes_3d, views, mount: Mount, length: float) -> None:

@@ -5,7 +5,6 @@ matplotlib's object interface with the Agg canvas, as plots.py.
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +15,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from hoseline.io.atomic import write_bytes
 from hoseline.procedures.sweep_result import SweepResult
-from hoseline.report.plots import VIEWS
+from hoseline.report.plots import VIEWS, finish_view, png_bytes
 from hoseline.report.sweep_figures import FREE_COLOUR, LOCKED_COLOUR, OBSTACLE_COLOUR, VIOLATION_COLOUR, travel_axis
 
 SHAPES_SHOWN = 9  # poses drawn in the view picture besides the worst one
@@ -51,16 +50,14 @@ def plot_sweep_view(result: SweepResult, path_png: str | Path) -> Path:
             pair = np.vstack([clearance.on_hose[worst], clearance.on_obstacle[worst]])
             axes.plot(*project(pair), color=VIOLATION_COLOUR, marker="o", markersize=3)
         if axes is not axes_3d:
-            axes.set(title=title, xlabel=f"{'xyz'[i]} [mm]", ylabel=f"{'xyz'[j]} [mm]")
-            axes.set_aspect("equal", adjustable="datalim")
-            axes.grid(True, alpha=0.3)
+            finish_view(axes, title, i, j)
     axes_3d.set(xlabel="x [mm]", ylabel="y [mm]", zlabel="z [mm]", title="hose through the sweep (grey: other poses)")
     everything = np.vstack([result.centerlines.reshape(-1, 3)] + [t.reshape(-1, 3) for t in meshes])
     low, high = everything.min(axis=0), everything.max(axis=0)
     axes_3d.set(xlim=(low[0], high[0]), ylim=(low[1], high[1]), zlim=(low[2], high[2]))
     axes_3d.set_box_aspect(high - low + 1.0)
     axes_3d.legend(loc="upper left")
-    return _save(figure, path_png)
+    return write_bytes(path_png, png_bytes(figure))
 
 
 def plot_sweep_curves(result: SweepResult, path_png: str | Path) -> Path:
@@ -90,7 +87,7 @@ def plot_sweep_curves(result: SweepResult, path_png: str | Path) -> Path:
             axes.legend()
     for axes in panels[2:]:
         axes.set_xlabel(label)
-    return _save(figure, path_png)
+    return write_bytes(path_png, png_bytes(figure))
 
 
 def _worst_pose(result: SweepResult) -> int:
@@ -105,8 +102,3 @@ def _obstacle_triangles(result: SweepResult, obstacle, k: int) -> np.ndarray:
     step = max(1, len(obstacle.faces) // OBSTACLE_TRIANGLES)
     return result.sweep.pose(obstacle.body, k).points(obstacle.vertices)[obstacle.faces[::step]]
 
-
-def _save(figure: Figure, path_png: str | Path) -> Path:
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=90)
-    return write_bytes(path_png, buffer.getvalue())

@@ -25,7 +25,7 @@ from hoseline.procedures.calibration import Calibration
 from hoseline.procedures.scatter import ScatterEnvelope
 from hoseline.procedures.twist_path import TwistPath
 from hoseline.procedures.validation import Comparison
-from hoseline.report.plots import VIEWS, AXIS_NAMES
+from hoseline.report.plots import VIEWS, finish_view, png_bytes
 
 OVERLAY_POINTS = 20000  # scan points drawn in the 3D overlay, at most (all scans together)
 
@@ -98,11 +98,9 @@ def deviation_png(comparisons: Sequence[Comparison], envelope: ScatterEnvelope |
             model = axes.plot(c.result.centerline[:, i], c.result.centerline[:, j], label=f"model {c.label}")[0]
             axes.plot(c.fit.points[:, i], c.fit.points[:, j], "o", markersize=3, color=model.get_color(),
                       markerfacecolor="none", label=f"scan centreline {c.label}")
-        axes.set(title=title, xlabel=f"{AXIS_NAMES[i]} [mm]", ylabel=f"{AXIS_NAMES[j]} [mm]")
-        axes.set_aspect("equal", adjustable="datalim")
-        axes.grid(True, alpha=0.3)
+        finish_view(axes, title, i, j)
         axes.legend(fontsize="small")
-    return _png_bytes(figure)
+    return png_bytes(figure)
 
 
 def twist_paths_png(paths: Sequence[TwistPath]) -> bytes:
@@ -114,9 +112,7 @@ def twist_paths_png(paths: Sequence[TwistPath]) -> bytes:
         for path in paths:
             final = path.centerlines[-1]
             axes.plot(final[:, i], final[:, j], label=f"{path.label} at {path.twists_deg[-1]:g} deg")
-        axes.set(title=title, xlabel=f"{AXIS_NAMES[i]} [mm]", ylabel=f"{AXIS_NAMES[j]} [mm]")
-        axes.set_aspect("equal", adjustable="datalim")
-        axes.grid(True, alpha=0.3)
+        finish_view(axes, title, i, j)
         axes.legend(fontsize="small")
     steps = figure.add_subplot(1, 3, 3)
     for path in paths:
@@ -124,7 +120,7 @@ def twist_paths_png(paths: Sequence[TwistPath]) -> bytes:
     steps.set(title="largest station movement per twist step", xlabel="twist [deg]", ylabel="movement [mm]")
     steps.grid(True, alpha=0.3)
     steps.legend(fontsize="small")
-    return _png_bytes(figure)
+    return png_bytes(figure)
 
 
 def overlay_figure(comparisons: Sequence[Comparison]) -> go.Figure:
@@ -151,12 +147,6 @@ def overlay_figure(comparisons: Sequence[Comparison]) -> go.Figure:
                                 "zaxis_title": "z [mm]"}, height=700, margin={"l": 0, "r": 0, "t": 30, "b": 0},
                          legend={"itemsizing": "constant", "x": 0.0, "y": 1.0})
     return figure
-
-
-def _png_bytes(figure: Figure) -> bytes:
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=90)
-    return buffer.getvalue()
 
 
 def _document(comparisons, envelope, calibration, twist_paths) -> dict:
