@@ -255,4 +255,8 @@ def test_a_fork_on_the_twist_path_is_not_stepped_over():
         assert any(event.startswith("twist: stability lost") for event in result.events), result.events
         assert not result.unique
     assert default.elastic_energy == pytest.approx(fine.elastic_energy, rel=1e-9)
-    assert np.max(np.abs(default.centerline - fine.centerline)) < 1e-6
+    # the side taken at the fork is decided by rounding: the same shape, or its image in the
+    # plane y = 40 mm that swaps the two mounts (an equally good answer)
+    swapped = fine.centerline[::-1] * np.array([1.0, -1.0, 1.0]) + np.array([0.0, 80.0, 0.0])
+    difference = min(np.max(np.abs(default.centerline - other)) for other in (fine.centerline, swapped))
+    assert difference < 1e-6

@@ -46,14 +46,6 @@ BANDWIDTH = 5  # half bandwidth of the Hessian: 3x3 blocks, neighbours only
 
 
 @njit(cache=True)
-def _cross_into(out, row, a, b, sign):
-    # out[row] += sign * (a x b)
-    out[row, 0] += sign * (a[1] * b[2] - a[2] * b[1])
-    out[row, 1] += sign * (a[2] * b[0] - a[0] * b[2])
-    out[row, 2] += sign * (a[0] * b[1] - a[1] * b[0])
-
-
-@njit(cache=True)
 def joint_terms(frame_a, frame_b, stiffness, joint_length):
     """Energy, gradient and Hessian blocks of one elastic joint.
 
@@ -63,123 +55,118 @@ def joint_terms(frame_a, frame_b, stiffness, joint_length):
     term is 1/2 da.Haa.da + 1/2 db.Hbb.db + da.Hab.db (hess_ab is not symmetric);
     grad_b = -grad_a and hess_bb = hess_aa because the energy depends on the relative rotation only.
     """
-    scratch = new_scratch()
     grad_a = np.empty(3)
     hess_aa = np.empty((3, 3))
     hess_ab = np.empty((3, 3))
-    energy = joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, scratch)
+    energy = joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab)
     return energy, grad_a, -grad_a, hess_aa, hess_aa.copy(), hess_ab
 
 
 @njit(cache=True)
-def new_scratch():
-    """Work arrays for joint_terms_into, allocated once per assembly (allocation dominates otherwise)."""
-    return np.empty((3, 3)), np.empty(4), np.empty((4, 4)), np.empty((3, 3)), np.empty((4, 3)), np.empty((4, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+def _row(frame, k):
+    # director k of a frame as a 3-tuple (tuples stay in registers, small arrays do not)
+    return frame[k, 0], frame[k, 1], frame[k, 2]
 
 
 @njit(cache=True)
-def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, scratch):
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+@njit(cache=True)
+def _combine(s0, u0, s1, u1, s2, u2):
+    # s0 u0 + s1 u1 + s2 u2 for 3-tuples u
+    return (
+        s0 * u0[0] + s1 * u1[0] + s2 * u2[0],
+        s0 * u0[1] + s1 * u1[1] + s2 * u2[1],
+        s0 * u0[2] + s1 * u1[2] + s2 * u2[2],
+    )
+
+
+@njit(cache=True)
+def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab):
     """joint_terms writing grad_a, hess_aa, hess_ab into given arrays; returns the energy.
 
-    Written with explicit loops: 3x3 products through BLAS and small temporary arrays
-    cost more than the arithmetic.
+    Written with scalars and 3-tuples: 3x3 products through BLAS and small temporary arrays
+    cost more than the arithmetic (this runs N+1 times per Newton iteration).
     """
-    q, e_u, e_uu, w, b, eb, first, wb, t = scratch
-    for k in range(3):
-        for l in range(3):
-            q[k, l] = frame_a[k, 0] * frame_b[l, 0] + frame_a[k, 1] * frame_b[l, 1] + frame_a[k, 2] * frame_b[l, 2]
-    a0 = q[2, 1] - q[1, 2]
-    a1 = q[0, 2] - q[2, 0]
-    a2 = q[1, 0] - q[0, 1]
-    c = 1.0 + q[0, 0] + q[1, 1] + q[2, 2]
-    scale = 2.0 / joint_length
+    a_0, a_1, a_2 = _row(frame_a, 0), _row(frame_a, 1), _row(frame_a, 2)
+    b_0, b_1, b_2 = _row(frame_b, 0), _row(frame_b, 1), _row(frame_b, 2)
+    # Q = A B^T, Q_kl = d_k^A . d_l^B
+    q00, q01, q02 = _dot(a_0, b_0), _dot(a_0, b_1), _dot(a_0, b_2)
+    q10, q11, q12 = _dot(a_1, b_0), _dot(a_1, b_1), _dot(a_1, b_2)
+    q20, q21, q22 = _dot(a_2, b_0), _dot(a_2, b_1), _dot(a_2, b_2)
+    a0 = q21 - q12
+    a1 = q02 - q20
+    a2 = q10 - q01
+    trace = q00 + q11 + q22
+    c = 1.0 + trace
     k0, k1, k2 = stiffness[0], stiffness[1], stiffness[2]
-    ka2 = k0 * a0 * a0 + k1 * a1 * a1 + k2 * a2 * a2
+    scale = 2.0 / joint_length
     c2 = c * c
-    energy = scale * ka2 / c2
+    energy = scale * (k0 * a0 * a0 + k1 * a1 * a1 + k2 * a2 * a2) / c2
 
-    # first and second derivatives with respect to u = (a1, a2, a3, c)
-    e_u[0] = 2.0 * scale * k0 * a0 / c2
-    e_u[1] = 2.0 * scale * k1 * a1 / c2
-    e_u[2] = 2.0 * scale * k2 * a2 / c2
-    e_u[3] = -2.0 * scale * ka2 / (c2 * c)
-    e_uu[:, :] = 0.0
-    e_uu[0, 0] = 2.0 * scale * k0 / c2
-    e_uu[1, 1] = 2.0 * scale * k1 / c2
-    e_uu[2, 2] = 2.0 * scale * k2 / c2
-    e_uu[0, 3] = e_uu[3, 0] = -4.0 * scale * k0 * a0 / (c2 * c)
-    e_uu[1, 3] = e_uu[3, 1] = -4.0 * scale * k1 * a1 / (c2 * c)
-    e_uu[2, 3] = e_uu[3, 2] = -4.0 * scale * k2 * a2 / (c2 * c)
-    e_uu[3, 3] = 6.0 * scale * ka2 / (c2 * c2)
+    # first and second derivatives with respect to u = (a1, a2, a3, c); E_uu is diagonal in
+    # (a1, a2, a3) plus the row and column of c
+    f = 2.0 * scale / c2
+    e_a0, e_a1, e_a2 = f * k0 * a0, f * k1 * a1, f * k2 * a2
+    e_c = -2.0 * energy / c
+    e_a0a0, e_a1a1, e_a2a2 = f * k0, f * k1, f * k2
+    e_a0c, e_a1c, e_a2c = -2.0 * e_a0 / c, -2.0 * e_a1 / c, -2.0 * e_a2 / c
+    e_cc = 6.0 * energy / c2
 
-    # dE/dQ_kl (weight of each entry of Q)
-    w[:, :] = 0.0
-    w[2, 1] += e_u[0]
-    w[1, 2] -= e_u[0]
-    w[0, 2] += e_u[1]
-    w[2, 0] -= e_u[1]
-    w[1, 0] += e_u[2]
-    w[0, 1] -= e_u[2]
-    for k in range(3):
-        w[k, k] += e_u[3]
+    # b_u = du/d(delta_a) (du/d(delta_b) = -b_u).  dQ_kl/d(delta_a) = d_k^A x d_l^B summed
+    # with the Levi-Civita identity:  d(a_m)/d(delta_a) = sum_x (Q_mx - delta_mx tr Q) d_x^A,
+    # dc/d(delta_a) = sum_m a_m d_m^A.
+    bu0 = _combine(q00 - trace, a_0, q01, a_1, q02, a_2)
+    bu1 = _combine(q10, a_0, q11 - trace, a_1, q12, a_2)
+    bu2 = _combine(q20, a_0, q21, a_1, q22 - trace, a_2)
+    bu3 = _combine(a0, a_0, a1, a_1, a2, a_2)
+    border = _combine(e_a0c, bu0, e_a1c, bu1, e_a2c, bu2)  # sum_m E_(a_m c) b_m
 
-    # b_u = du/d(delta_a); du/d(delta_b) = -b_u, because dQ_kl/d(delta_a) = d_k^A x d_l^B = -dQ_kl/d(delta_b)
-    b[:, :] = 0.0
-    _cross_into(b, 0, frame_a[2], frame_b[1], 1.0)
-    _cross_into(b, 0, frame_a[1], frame_b[2], -1.0)
-    _cross_into(b, 1, frame_a[0], frame_b[2], 1.0)
-    _cross_into(b, 1, frame_a[2], frame_b[0], -1.0)
-    _cross_into(b, 2, frame_a[1], frame_b[0], 1.0)
-    _cross_into(b, 2, frame_a[0], frame_b[1], -1.0)
-    for k in range(3):
-        _cross_into(b, 3, frame_a[k], frame_b[k], 1.0)
+    # W = dE/dQ = [E_a]x + E_c I;  rows of W B, then T = A^T W B (columns) and s = <W, Q>
+    wb0 = _combine(e_c, b_0, -e_a2, b_1, e_a1, b_2)
+    wb1 = _combine(e_a2, b_0, e_c, b_1, -e_a0, b_2)
+    wb2 = _combine(-e_a1, b_0, e_a0, b_1, e_c, b_2)
+    t = (
+        _combine(wb0[0], a_0, wb1[0], a_1, wb2[0], a_2),
+        _combine(wb0[1], a_0, wb1[1], a_1, wb2[1], a_2),
+        _combine(wb0[2], a_0, wb1[2], a_1, wb2[2], a_2),
+    )  # t[y][x] = T_xy
+    s = e_c * trace + e_a0 * a0 + e_a1 * a1 + e_a2 * a2
 
-    grad_a[:] = 0.0
-    for u in range(4):
-        for x in range(3):
-            grad_a[x] += e_u[u] * b[u, x]
-
-    # first = b^T e_uu b ; t = A^T w B = sum_kl w_kl d_k^A (d_l^B)^T ; s = <w, Q>
-    eb[:, :] = 0.0
-    for u in range(4):
-        for v in range(4):
-            if e_uu[u, v] != 0.0:
-                for x in range(3):
-                    eb[u, x] += e_uu[u, v] * b[v, x]
     for x in range(3):
-        for y in range(3):
-            acc = 0.0
-            for u in range(4):
-                acc += b[u, x] * eb[u, y]
-            first[x, y] = acc
-    wb[:, :] = 0.0  # w @ B
-    s = 0.0
-    for k in range(3):
-        for l in range(3):
-            s += w[k, l] * q[k, l]
-            if w[k, l] != 0.0:
-                for y in range(3):
-                    wb[k, y] += w[k, l] * frame_b[l, y]
-    for x in range(3):
-        for y in range(3):
-            t[x, y] = frame_a[0, x] * wb[0, y] + frame_a[1, x] * wb[1, y] + frame_a[2, x] * wb[2, y]
-    for x in range(3):
-        for y in range(3):
-            hess_aa[x, y] = first[x, y] + 0.5 * (t[x, y] + t[y, x])
-            hess_ab[x, y] = -first[x, y] - t[y, x]
+        grad_a[x] = e_a0 * bu0[x] + e_a1 * bu1[x] + e_a2 * bu2[x] + e_c * bu3[x]
+        for y in range(x + 1):
+            # first = b^T E_uu b (symmetric)
+            first = (
+                e_a0a0 * bu0[x] * bu0[y] + e_a1a1 * bu1[x] * bu1[y] + e_a2a2 * bu2[x] * bu2[y]
+                + e_cc * bu3[x] * bu3[y] + border[x] * bu3[y] + bu3[x] * border[y]
+            )
+            hess_aa[x, y] = hess_aa[y, x] = first + 0.5 * (t[y][x] + t[x][y])
+            hess_ab[x, y] = -first - t[x][y]
+            hess_ab[y, x] = -first - t[y][x]
         hess_aa[x, x] -= s
         hess_ab[x, x] += s
     return energy
 
 
 @njit(cache=True)
+def _axial_and_c(frame_a, frame_b):
+    # a = axial(Q - Q^T) and c = 1 + tr Q of Q = A B^T (see the module doc), without forming Q
+    a_0, a_1, a_2 = _row(frame_a, 0), _row(frame_a, 1), _row(frame_a, 2)
+    b_0, b_1, b_2 = _row(frame_b, 0), _row(frame_b, 1), _row(frame_b, 2)
+    a0 = _dot(a_2, b_1) - _dot(a_1, b_2)
+    a1 = _dot(a_0, b_2) - _dot(a_2, b_0)
+    a2 = _dot(a_1, b_0) - _dot(a_0, b_1)
+    c = 1.0 + _dot(a_0, b_0) + _dot(a_1, b_1) + _dot(a_2, b_2)
+    return a0, a1, a2, c
+
+
+@njit(cache=True)
 def joint_energy(frame_a, frame_b, stiffness, joint_length):
     """Energy of one joint only (N*mm); see joint_terms."""
-    q = frame_a @ frame_b.T
-    a0 = q[2, 1] - q[1, 2]
-    a1 = q[0, 2] - q[2, 0]
-    a2 = q[1, 0] - q[0, 1]
-    c = 1.0 + q[0, 0] + q[1, 1] + q[2, 2]
+    a0, a1, a2, c = _axial_and_c(frame_a, frame_b)
     return 2.0 / joint_length * (stiffness[0] * a0**2 + stiffness[1] * a1**2 + stiffness[2] * a2**2) / c**2
 
 
@@ -237,17 +224,16 @@ def assemble(
     n_seg = frames.shape[0]
     grad[:] = 0.0
     band[:, :] = 0.0
-    scratch = new_scratch()
     g = np.empty(3)
     haa = np.empty((3, 3))
     hab = np.empty((3, 3))
-    energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab, scratch)
+    energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab)
     if springs is not None:
         energy += spring_terms_into(start_frame, frames[0], springs, HALF, g, haa, hab)
     grad[0:3] -= g
     _add_diag_block(band, 0, haa)
     for i in range(n_seg - 1):
-        energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab, scratch)
+        energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab)
         if springs is not None:
             energy += spring_terms_into(frames[i], frames[i + 1], springs, FULL, g, haa, hab)
         for x in range(3):
@@ -258,7 +244,7 @@ def assemble(
         _add_lower_block_transposed(band, 3 * i + 3, 3 * i, hab)
     last = 3 * (n_seg - 1)
     if end_clamped:
-        energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab, scratch)
+        energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab)
         if springs is not None:
             energy += spring_terms_into(frames[n_seg - 1], end_frame, springs, HALF, g, haa, hab)
         for x in range(3):
@@ -299,7 +285,6 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
     carries no moment.
     """
     n_seg = frames.shape[0]
-    scratch = new_scratch()
     g = np.empty(3)
     haa = np.empty((3, 3))
     hab = np.empty((3, 3))
@@ -312,13 +297,12 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
             fa, fb, length, kind = frames[n_seg - 1], end_frame, 0.5 * h, HALF
         else:
             fa, fb, length, kind = frames[j - 1], frames[j], h, FULL
-        joint_terms_into(fa, fb, stiffness, length, g, haa, hab, scratch)
+        joint_terms_into(fa, fb, stiffness, length, g, haa, hab)
         if springs is not None:
             spring_terms_into(fa, fb, springs, kind, g, haa, hab)
         moments[j] = -g
-        q = fa @ fb.T
-        c = 1.0 + q[0, 0] + q[1, 1] + q[2, 2]
-        darboux[j, 0] = 2.0 * (q[2, 1] - q[1, 2]) / (c * length)
-        darboux[j, 1] = 2.0 * (q[0, 2] - q[2, 0]) / (c * length)
-        darboux[j, 2] = 2.0 * (q[1, 0] - q[0, 1]) / (c * length)
+        a0, a1, a2, c = _axial_and_c(fa, fb)
+        darboux[j, 0] = 2.0 * a0 / (c * length)
+        darboux[j, 1] = 2.0 * a1 / (c * length)
+        darboux[j, 2] = 2.0 * a2 / (c * length)
     return moments, darboux

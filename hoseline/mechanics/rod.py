@@ -55,7 +55,8 @@ def centerline(frames, start_point, h):
     out = np.empty((n + 1, 3))
     out[0] = start_point
     for i in range(n):
-        out[i + 1] = out[i] + h * frames[i, 2]
+        for k in range(3):  # element by element: a vector expression here would allocate per segment
+            out[i + 1, k] = out[i, k] + h * frames[i, 2, k]
     return out
 
 
@@ -65,7 +66,9 @@ def segment_loads(frames, end_force, line_weight, h):
     n = frames.shape[0]
     out = np.empty((n, 3))
     for i in range(n):
-        out[i] = h * (end_force + (n - i - 0.5) * h * line_weight)
+        beyond = (n - i - 0.5) * h  # length of hose beyond the segment's centre, mm
+        for k in range(3):  # element by element: a vector expression here would allocate per segment
+            out[i, k] = h * (end_force[k] + beyond * line_weight[k])
     return out
 
 

@@ -14,24 +14,29 @@ from numba import njit
 
 
 @njit(cache=True)
-def rotation_matrix(rotation_vector: np.ndarray) -> np.ndarray:
-    """Rodrigues' formula: the rotation by |v| radians about v/|v| (world axes)."""
-    angle = math.sqrt(rotation_vector[0] ** 2 + rotation_vector[1] ** 2 + rotation_vector[2] ** 2)
-    out = np.eye(3)
+def _rotation_entries(vx, vy, vz):
+    # Rodrigues' formula for the rotation vector (vx, vy, vz): the nine entries, row by row, as scalars
+    angle = math.sqrt(vx * vx + vy * vy + vz * vz)
     if angle < 1e-300:
-        return out
-    kx, ky, kz = rotation_vector[0] / angle, rotation_vector[1] / angle, rotation_vector[2] / angle
+        return 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+    kx, ky, kz = vx / angle, vy / angle, vz / angle
     c, s = math.cos(angle), math.sin(angle)
     t = 1.0 - c
-    out[0, 0] = c + kx * kx * t
-    out[0, 1] = kx * ky * t - kz * s
-    out[0, 2] = kx * kz * t + ky * s
-    out[1, 0] = ky * kx * t + kz * s
-    out[1, 1] = c + ky * ky * t
-    out[1, 2] = ky * kz * t - kx * s
-    out[2, 0] = kz * kx * t - ky * s
-    out[2, 1] = kz * ky * t + kx * s
-    out[2, 2] = c + kz * kz * t
+    return (
+        c + kx * kx * t, kx * ky * t - kz * s, kx * kz * t + ky * s,
+        ky * kx * t + kz * s, c + ky * ky * t, ky * kz * t - kx * s,
+        kz * kx * t - ky * s, kz * ky * t + kx * s, c + kz * kz * t,
+    )
+
+
+@njit(cache=True)
+def rotation_matrix(rotation_vector: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula: the rotation by |v| radians about v/|v| (world axes)."""
+    r = _rotation_entries(rotation_vector[0], rotation_vector[1], rotation_vector[2])
+    out = np.empty((3, 3))
+    for x in range(3):
+        for y in range(3):
+            out[x, y] = r[3 * x + y]
     return out
 
 
@@ -40,12 +45,14 @@ def rotate_frames(frames: np.ndarray, rotation_vectors: np.ndarray) -> np.ndarra
     """New frames after rotating frame i by the world rotation vector rotation_vectors[i] (rad)."""
     out = np.empty_like(frames)
     for i in range(frames.shape[0]):
-        rotation = rotation_matrix(rotation_vectors[i])
-        for k in range(3):  # d_k -> R d_k, written out (3x3 BLAS calls cost more than the arithmetic)
-            for x in range(3):
-                out[i, k, x] = (
-                    rotation[x, 0] * frames[i, k, 0] + rotation[x, 1] * frames[i, k, 1] + rotation[x, 2] * frames[i, k, 2]
-                )
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rotation_entries(
+            rotation_vectors[i, 0], rotation_vectors[i, 1], rotation_vectors[i, 2]
+        )
+        for k in range(3):  # d_k -> R d_k, written out (3x3 BLAS calls and temporary arrays cost more than the arithmetic)
+            d0, d1, d2 = frames[i, k, 0], frames[i, k, 1], frames[i, k, 2]
+            out[i, k, 0] = r00 * d0 + r01 * d1 + r02 * d2
+            out[i, k, 1] = r10 * d0 + r11 * d1 + r12 * d2
+            out[i, k, 2] = r20 * d0 + r21 * d1 + r22 * d2
     return out
 
 
@@ -53,15 +60,26 @@ def rotate_frames(frames: np.ndarray, rotation_vectors: np.ndarray) -> np.ndarra
 def extrapolate_frames(previous: np.ndarray, current: np.ndarray, ratio: float) -> np.ndarray:
     """Secant predictor on the rotation group: apply `ratio` times the rotation that took
     each frame from `previous` to `current` once more (rotations of moderate size)."""
-    out = np.empty_like(current)
-    for i in range(current.shape[0]):
-        rel = current[i].T @ previous[i]  # world rotation R with current = previous @ R^T
-        cos_angle = min(1.0, max(-1.0, 0.5 * (rel[0, 0] + rel[1, 1] + rel[2, 2] - 1.0)))
+    n = current.shape[0]
+    rotations = np.empty((n, 3))
+    for i in range(n):
+        # world rotation R with current = previous @ R^T, i.e. R = current^T previous: its
+        # trace and axial part, from the directors d_k (trace = sum_k d_k^cur . d_k^prev,
+        # axial = sum_k d_k^prev x d_k^cur)
+        trace = 0.0
+        ax, ay, az = 0.0, 0.0, 0.0
+        for k in range(3):
+            c0, c1, c2 = current[i, k, 0], current[i, k, 1], current[i, k, 2]
+            p0, p1, p2 = previous[i, k, 0], previous[i, k, 1], previous[i, k, 2]
+            trace += c0 * p0 + c1 * p1 + c2 * p2
+            ax += p1 * c2 - p2 * c1
+            ay += p2 * c0 - p0 * c2
+            az += p0 * c1 - p1 * c0
+        cos_angle = min(1.0, max(-1.0, 0.5 * (trace - 1.0)))
         angle = math.acos(cos_angle)
-        factor = 0.5 if angle < 1e-8 else 0.5 * angle / math.sin(angle)
-        omega = np.array([rel[2, 1] - rel[1, 2], rel[0, 2] - rel[2, 0], rel[1, 0] - rel[0, 1]]) * (factor * ratio)
-        out[i] = current[i] @ rotation_matrix(omega).T
-    return out
+        factor = (0.5 if angle < 1e-8 else 0.5 * angle / math.sin(angle)) * ratio
+        rotations[i, 0], rotations[i, 1], rotations[i, 2] = ax * factor, ay * factor, az * factor
+    return rotate_frames(current, rotations)
 
 
 def rotation_vector(matrix: np.ndarray) -> np.ndarray:

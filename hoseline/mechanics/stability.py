@@ -9,10 +9,13 @@ eigen-decomposition of the projected Hessian is used instead (rare, and only the
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.linalg
+from numba import njit
 
-from hoseline.mechanics.banded import banded_matvec, kkt_solve, ldlt_banded, ldlt_solve
+from hoseline.mechanics.banded import banded_matvec, kkt_solve, ldlt_banded, ldlt_solve, solve_3x3
 
 
 def _band_to_dense(band: np.ndarray) -> np.ndarray:
@@ -45,35 +48,55 @@ def smallest_eigenpairs(band: np.ndarray, jac_t: np.ndarray, count: int = 1, tol
     negative = int(kkt_solve(lower, diag, jac_t, np.zeros(n), np.zeros(3))[2])
     if tiny or n < 40:
         return _dense_pairs(band, jac_t, count)
-    h_inv_jt = ldlt_solve(lower, diag, jac_t)
-    schur = jac_t.T @ h_inv_jt
-    normal = jac_t.T @ jac_t
-
-    def solve_projected(rhs: np.ndarray) -> np.ndarray:
-        # [[H, J^T], [J, 0]] [w; y] = [rhs; 0]  ->  w = H^-1 (rhs - J^T y), J w = 0
-        h_inv_rhs = ldlt_solve(lower, diag, rhs)
-        y = np.linalg.solve(schur, jac_t.T @ h_inv_rhs)
-        return h_inv_rhs - h_inv_jt @ y
-
     block = max(count, negative) + 3
-    rng = np.random.default_rng(12345)
-    vectors = solve_projected(rng.standard_normal((n, block)))
-    values = np.full(block, np.inf)
-    for _ in range(200):
-        vectors, _ = np.linalg.qr(vectors)
-        hv = banded_matvec(band, vectors)
-        ritz_values, ritz_vectors = np.linalg.eigh(vectors.T @ hv)
-        vectors = vectors @ ritz_vectors
-        raw = hv @ ritz_vectors - vectors * ritz_values
-        raw -= jac_t @ np.linalg.solve(normal, jac_t.T @ raw)  # only the part within the tangent space counts
-        residual = np.linalg.norm(raw, axis=0)
-        scale = max(abs(ritz_values[0]), 1e-30 * np.max(np.abs(band[:, 0])) + 1e-300)
-        values = ritz_values
-        if np.all(residual[:count] <= tolerance * max(scale, np.max(np.abs(ritz_values[:count])))):
-            break
-        vectors = solve_projected(vectors)
+    values, vectors = _subspace_iteration(band, jac_t, lower, diag, _start_block(n, block).copy(), count, tolerance)
     found_negative = int(np.sum(values < 0.0))
     if found_negative < negative:
         return _dense_pairs(band, jac_t, max(count, negative))
     order = np.argsort(values)[: max(count, negative)]
     return values[order], vectors[:, order]
+
+
+@functools.lru_cache(maxsize=16)
+def _start_block(n: int, block: int) -> np.ndarray:
+    """Fixed random start vectors (n, block) of the subspace iteration, the same for every call
+    (kept: drawing them costs more than a copy; callers copy before use)."""
+    return np.random.default_rng(12345).standard_normal((n, block))
+
+
+@njit(cache=True)
+def _solve_projected(lower, diag, jac_t, h_inv_jt, schur, rhs):
+    # [[H, J^T], [J, 0]] [w; y] = [rhs; 0]  ->  w = H^-1 (rhs - J^T y), J w = 0
+    h_inv_rhs = ldlt_solve(lower, diag, rhs)
+    y = solve_3x3(schur, jac_t.T @ h_inv_rhs)
+    return h_inv_rhs - h_inv_jt @ y
+
+
+@njit(cache=True)
+def _subspace_iteration(band, jac_t, lower, diag, start, count, tolerance):
+    """Shift-invert subspace iteration around zero on the constraint tangent space, from the
+    columns of `start`; returns the Ritz values and vectors of the last iteration (unsorted).
+
+    Compiled: a handful of iterations on (n, block) arrays, where Python's per-call cost of
+    every small NumPy operation would dominate.
+    """
+    h_inv_jt = ldlt_solve(lower, diag, jac_t)
+    schur = jac_t.T @ h_inv_jt
+    normal = jac_t.T @ jac_t
+    vectors = _solve_projected(lower, diag, jac_t, h_inv_jt, schur, start)
+    values = np.full(start.shape[1], np.inf)
+    band_scale = np.max(np.abs(band[:, 0]))
+    for _ in range(200):
+        vectors = np.ascontiguousarray(np.linalg.qr(vectors)[0])  # C order for banded_matvec
+        hv = banded_matvec(band, vectors)
+        ritz_values, ritz_vectors = np.linalg.eigh(vectors.T @ hv)
+        vectors = vectors @ ritz_vectors
+        raw = hv @ ritz_vectors - vectors * ritz_values
+        raw -= jac_t @ solve_3x3(normal, jac_t.T @ raw)  # only the part within the tangent space counts
+        residual = np.sqrt(np.sum(raw**2, axis=0))
+        scale = max(abs(ritz_values[0]), 1e-30 * band_scale + 1e-300)
+        values = ritz_values
+        if np.all(residual[:count] <= tolerance * max(scale, np.max(np.abs(ritz_values[:count])))):
+            break
+        vectors = _solve_projected(lower, diag, jac_t, h_inv_jt, schur, vectors)
+    return values, vectors

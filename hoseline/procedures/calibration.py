@@ -24,13 +24,12 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from hoseline.mechanics.newton import end_frame_of, node_positions, solve_equilibrium
-from hoseline.mechanics.rod import Clamps, RodState
-from hoseline.mechanics.rotations import frame_from_tangent, rotation_matrix
+from hoseline.mechanics.rod import RodState
 from hoseline.model.hose import Hose, isotropic_torsional_stiffness
 from hoseline.model.problem import Problem
 from hoseline.procedures.continuation import PlacementError
 from hoseline.procedures.deviation import Deviation, closest_on_polyline, deviation
-from hoseline.procedures.placement import placement_rotation, rod_properties, solve, weight_vector
+from hoseline.procedures.placement import PlacementPath, rod_properties, solve
 
 PARAMETERS = {"bending_stiffness": "N*mm^2", "torsion_factor": "", "mass_per_length": "kg/m", "length": "mm"}
 UNIDENTIFIABLE_RELATIVE_STD = 0.25
@@ -131,19 +130,15 @@ class WarmStartedModel:
     def _warm(self, problem: Problem) -> list[np.ndarray] | None:
         """Newton from the last states: the placed hose (end roll free), then each twist; None if any fails."""
         props = rod_properties(problem)
-        start_frame = frame_from_tangent(problem.start.direction)
-        axis, angle = placement_rotation(problem)
-        weight = weight_vector(problem)
-        placed_clamps = Clamps(problem.start.point, start_frame, problem.end.point,
-                               start_frame @ rotation_matrix(axis * angle).T, True, weight)
+        path = PlacementPath(problem)
+        placed_clamps = path.place(1.0)
         placed, report = solve_equilibrium(props, placed_clamps, self.place_state)
         if not (report.converged and report.unstable_directions == 0):
             return None
         locked = end_frame_of(placed_clamps, placed)
         states, lines = [], []
         for twist, previous in zip(self.twists, self.twisted_states):
-            turned = locked @ rotation_matrix(problem.end.direction * math.radians(twist)).T
-            clamps = Clamps(problem.start.point, start_frame, problem.end.point, turned, False, weight)
+            clamps = path.twisted(locked, twist)
             state, report = solve_equilibrium(props, clamps, previous)
             if not (report.converged and report.unstable_directions == 0):
                 return None

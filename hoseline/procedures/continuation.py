@@ -88,7 +88,11 @@ def relax_to_stable(
                 stable.append((total_energy(props, clamps, state), state))
     if not stable:
         return None
-    stable.sort(key=lambda pair: pair[0])
+    # lowest energy first; energies within 1e-9 count as equal and keep the candidates' order, so
+    # rounding cannot decide between the two sides of a symmetric fork
+    lowest = min(energy for energy, _ in stable)
+    tie = 1e-9 * max(abs(lowest), 1e-300)
+    stable = [pair for _, pair in sorted(enumerate(stable), key=lambda item: (round((item[1][0] - lowest) / tie), item[0]))]
     distinct: list[tuple[float, RodState]] = []
     for energy, state in stable:
         nodes = node_positions(props, clamps, state)

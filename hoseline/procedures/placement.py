@@ -91,6 +91,44 @@ def placement_rotation(problem: Problem) -> tuple[np.ndarray, float]:
     return perpendicular(t0), angle
 
 
+class PlacementPath:
+    """The clamps along the placement of one problem: the place phase and the twisted end.
+
+    place(t): t in [0, 1] carries the end of the straight hose onto the end mount (roll free,
+    weight ramped in).  twisted(locked_frame, twist_deg): the end fitting at the end mount,
+    turned by twist_deg degrees about end.direction from the locked frame (roll clamped).
+    """
+
+    def __init__(self, problem: Problem):
+        self.problem = problem
+        self.start_frame = frame_from_tangent(problem.start.direction)
+        self.straight_end = problem.start.point + problem.hose.length * problem.start.direction
+        self.axis, self.angle = placement_rotation(problem)
+        self.weight = weight_vector(problem)
+
+    def place(self, t: float) -> Clamps:
+        """Clamps at fraction t of the place phase."""
+        return Clamps(
+            start_point=self.problem.start.point,
+            start_frame=self.start_frame,
+            end_point=(1.0 - t) * self.straight_end + t * self.problem.end.point,
+            end_frame=self.start_frame @ rotation_matrix(self.axis * (self.angle * t)).T,
+            roll_free=True,
+            line_weight=t * self.weight,
+        )
+
+    def twisted(self, locked_frame: np.ndarray, twist_deg: float) -> Clamps:
+        """Clamps with the end fitting turned by twist_deg (degrees) from locked_frame."""
+        return Clamps(
+            start_point=self.problem.start.point,
+            start_frame=self.start_frame,
+            end_point=self.problem.end.point,
+            end_frame=locked_frame @ rotation_matrix(self.problem.end.direction * math.radians(twist_deg)).T,
+            roll_free=False,
+            line_weight=self.weight,
+        )
+
+
 def solve(
     problem: Problem,
     *,
@@ -107,25 +145,12 @@ def solve(
     started = time.perf_counter()
     props = rod_properties(problem)
     log = ContinuationLog()
-    start_point = problem.start.point
-    start_frame = frame_from_tangent(problem.start.direction)
-    straight_end = start_point + props.length * problem.start.direction
-    axis, angle = placement_rotation(problem)
-    weight = weight_vector(problem)
-
-    def place_path(t: float) -> Clamps:
-        return Clamps(
-            start_point=start_point,
-            start_frame=start_frame,
-            end_point=(1.0 - t) * straight_end + t * problem.end.point,
-            end_frame=start_frame @ rotation_matrix(axis * (angle * t)).T,
-            roll_free=True,
-            line_weight=t * weight,
-        )
+    path = PlacementPath(problem)
+    place_path = path.place
 
     first = control.first
     place_props = replace(props, springs=None)  # stiffener springs come in once placed (stiffening.py)
-    state = _initial_buckle(place_props, place_path, first, axis, log)
+    state = _initial_buckle(place_props, place_path, first, path.axis, log)
     state = follow("place", place_path, place_props, state, log, start=first, control=control, progress=progress)
     if props.springs is not None:
         state = phase_in_springs(props, place_path(1.0), state, log, progress)
@@ -133,17 +158,9 @@ def solve(
     locked_frame = end_frame_of(place_path(1.0), state)
     lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))
     twist = math.radians(problem.end_twist_deg)
-    end_axis = problem.end.direction
 
     def twist_path(t: float) -> Clamps:
-        return Clamps(
-            start_point=start_point,
-            start_frame=start_frame,
-            end_point=problem.end.point,
-            end_frame=locked_frame @ rotation_matrix(end_axis * (twist * t)).T,
-            roll_free=False,
-            line_weight=weight,
-        )
+        return path.twisted(locked_frame, problem.end_twist_deg * t)
 
     state = RodState(state.frames, state.end_force, 0.0)
     if twist != 0.0:

@@ -11,17 +11,15 @@ step and JUMP_FLOOR mm.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from hoseline.mechanics.newton import node_positions
 from hoseline.mechanics.rod import Clamps, RodState
-from hoseline.mechanics.rotations import rotation_matrix
 from hoseline.model.problem import Problem
 from hoseline.procedures.continuation import ContinuationLog, PlacementError, StepControl, follow
-from hoseline.procedures.placement import rod_properties, solve, weight_vector
+from hoseline.procedures.placement import PlacementPath, rod_properties, solve
 
 JUMP_FACTOR = 3.0
 JUMP_FLOOR = 1.0  # mm
@@ -64,15 +62,14 @@ def follow_twist(problem: Problem, twists_deg: np.ndarray, label: str) -> TwistP
     twists_deg = np.asarray(twists_deg, dtype=float)
     placed = solve(replace(problem, end_twist_deg=0.0))
     props = rod_properties(problem)
-    weight = weight_vector(problem)
+    path = PlacementPath(problem)
     state = RodState(placed.frames, placed.end_force)
     log = ContinuationLog()
     shapes = [placed.centerline]
     failure = ""
 
     def clamps_at(twist_deg: float) -> Clamps:
-        turned = placed.end_frame @ rotation_matrix(problem.end.direction * math.radians(twist_deg)).T
-        return Clamps(problem.start.point, placed.start_frame, problem.end.point, turned, False, weight)
+        return path.twisted(placed.end_frame, twist_deg)
 
     for low, high in zip(twists_deg[:-1], twists_deg[1:]):
         try:
