@@ -236,22 +236,14 @@ def run(segments: int = 100, twist_deg: float = 180.0, tol_mm: float = 0.01) -> 
         runner.step()
     runner.run_to_rest(tol_mm)
 
-    centerline = runner.centerline()
-    length = float(np.sum(np.linalg.norm(np.diff(centerline, axis=0), axis=1)))
     notes = (
         f"MuJoCo {mujoco.__version__} 1D flex elasticity (discrete elastic rod), {segments} elements, "
         f"E={p.equivalent_youngs_modulus:.1f} N/mm^2, G={p.equivalent_shear_modulus:.1f} N/mm^2, "
         f"density={DENSITY:g} t/mm^3, integrator=discrete, h={h:.3e} s, damping rate {damping:.1f} 1/s, "
         f"ramps {n_ramp} steps each; free-roll angle at end of place phase {np.degrees(free_roll):.2f} deg, "
-        f"end roll after twist {np.degrees(d.qpos[roll_q] - free_roll):.2f} deg; "
-        f"centerline length {length:.3f} mm (rest {p.length} mm)"
+        f"end roll after twist {np.degrees(d.qpos[roll_q] - free_roll):.2f} deg"
     )
-    return {
-        "centerline": centerline,
-        "wall_time": time.perf_counter() - wall0,
-        "sim_steps": runner.steps,
-        "notes": notes,
-    }
+    return common.outcome(runner.centerline(), wall0, runner.steps, notes, p.length)
 
 
 def cantilever(

@@ -253,22 +253,14 @@ def run(segments: int = 100, twist_deg: float = 180.0, tol_mm: float = 0.01) -> 
         runner.step()
     runner.run_to_rest(tol_mm)
 
-    centerline = runner.centerline()
-    length = float(np.sum(np.linalg.norm(np.diff(centerline, axis=0), axis=1)))
     notes = (
         f"PyElastica {version('pyelastica')} CosseratRod, {segments} elements, "
         f"E={p.equivalent_youngs_modulus:.1f} N/mm^2, shear G_s=E/3, GJ={p.torsional_stiffness:g} N mm^2, "
         f"rotary inertia x{p.torsional_stiffness / (p.equivalent_youngs_modulus / 3 * 2 * p.section_inertia):.1f}, "
         f"density={DENSITY:g} t/mm^3, PositionVerlet dt={dt:.3e} s, uniform damping {damping:.1f} 1/s, "
-        f"ramps {n_ramp} steps each; free-roll angle at end of place phase {np.degrees(roll):.2f} deg; "
-        f"centerline length {length:.3f} mm (rest {p.length} mm)"
+        f"ramps {n_ramp} steps each; free-roll angle at end of place phase {np.degrees(roll):.2f} deg"
     )
-    return {
-        "centerline": centerline,
-        "wall_time": time.perf_counter() - wall0,
-        "sim_steps": runner.steps,
-        "notes": notes,
-    }
+    return common.outcome(runner.centerline(), wall0, runner.steps, notes, p.length)
 
 
 def cantilever(
