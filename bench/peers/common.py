@@ -188,3 +188,24 @@ def outcome(centerline: np.ndarray, wall_start: float, steps: int, notes: str, r
         "sim_steps": steps,
         "notes": f"{notes}; centerline length {length:.3f} mm (rest {rest_length} mm)",
     }
+
+
+def cantilever_outcome(tip: np.ndarray, frame0: np.ndarray, steps: int, p: HoseProblem = BRAKE_HOSE) -> dict:
+    """Tip deflection (along d1 of the start frame) and shortening, both as fractions of L.
+
+    tip: tip position relative to the start point, mm.  frame0: start frame (directors as columns).
+    """
+    return {
+        "tip_deflection": float(np.dot(tip, frame0[:, 0]) / p.length),
+        "tip_shortening": float(1.0 - np.dot(tip, frame0[:, 2]) / p.length),
+        "sim_steps": steps,
+    }
+
+
+def print_outcome(result: dict) -> None:
+    """What a peer run as a script prints: wall time, steps, end nodes, notes."""
+    centerline = result["centerline"]
+    print(f"wall time {result['wall_time']:.2f} s, sim steps {result['sim_steps']}")
+    print("start node", np.array2string(centerline[0], precision=4))
+    print("end node  ", np.array2string(centerline[-1], precision=4))
+    print(result["notes"])

@@ -284,17 +284,8 @@ def cantilever(
     runner.step(n_ramp)
     runner.run_to_rest(tol_mm)
     tip = rod.position_collection[:, -1] - p.start_point
-    return {
-        "tip_deflection": float(np.dot(tip, frame0[:, 0]) / p.length),
-        "tip_shortening": float(1.0 - np.dot(tip, frame0[:, 2]) / p.length),
-        "sim_steps": runner.steps,
-    }
+    return common.cantilever_outcome(tip, frame0, runner.steps, p)
 
 
 if __name__ == "__main__":
-    result = run()
-    cl = result["centerline"]
-    print(f"wall time {result['wall_time']:.2f} s, sim steps {result['sim_steps']}")
-    print("start node", np.array2string(cl[0], precision=4))
-    print("end node  ", np.array2string(cl[-1], precision=4))
-    print(result["notes"])
+    common.print_outcome(run())

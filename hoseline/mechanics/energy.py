@@ -46,23 +46,6 @@ BANDWIDTH = 5  # half bandwidth of the Hessian: 3x3 blocks, neighbours only
 
 
 @njit(cache=True)
-def joint_terms(frame_a, frame_b, stiffness, joint_length):
-    """Energy, gradient and Hessian blocks of one elastic joint.
-
-    frame_a, frame_b: 3x3 frames (rows = directors).  stiffness: (EI1, EI2, GJ) N*mm^2.
-    joint_length: mm.
-    Returns (energy, grad_a, grad_b, hess_aa, hess_bb, hess_ab) where the second-order
-    term is 1/2 da.Haa.da + 1/2 db.Hbb.db + da.Hab.db (hess_ab is not symmetric);
-    grad_b = -grad_a and hess_bb = hess_aa because the energy depends on the relative rotation only.
-    """
-    grad_a = np.empty(3)
-    hess_aa = np.empty((3, 3))
-    hess_ab = np.empty((3, 3))
-    energy = joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab)
-    return energy, grad_a, -grad_a, hess_aa, hess_aa.copy(), hess_ab
-
-
-@njit(cache=True)
 def _row(frame, k):
     # director k of a frame as a 3-tuple (tuples stay in registers, small arrays do not)
     return frame[k, 0], frame[k, 1], frame[k, 2]
@@ -85,8 +68,12 @@ def _combine(s0, u0, s1, u1, s2, u2):
 
 @njit(cache=True)
 def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab):
-    """joint_terms writing grad_a, hess_aa, hess_ab into given arrays; returns the energy.
+    """Energy (returned), gradient and Hessian blocks of one elastic joint, written into given arrays.
 
+    frame_a, frame_b: 3x3 frames (rows = directors).  stiffness: (EI1, EI2, GJ) N*mm^2.
+    joint_length: mm.  grad_a (3,), hess_aa, hess_ab (3, 3): outputs; the second-order term is
+    1/2 da.Haa.da + 1/2 db.Hbb.db + da.Hab.db (hess_ab is not symmetric), and grad_b = -grad_a,
+    hess_bb = hess_aa because the energy depends on the relative rotation only.
     Written with scalars and 3-tuples: 3x3 products through BLAS and small temporary arrays
     cost more than the arithmetic (this runs N+1 times per Newton iteration).
     """
@@ -165,7 +152,7 @@ def _axial_and_c(frame_a, frame_b):
 
 @njit(cache=True)
 def joint_energy(frame_a, frame_b, stiffness, joint_length):
-    """Energy of one joint only (N*mm); see joint_terms."""
+    """Energy of one joint only (N*mm); see joint_terms_into."""
     a0, a1, a2, c = _axial_and_c(frame_a, frame_b)
     return 2.0 / joint_length * (stiffness[0] * a0**2 + stiffness[1] * a1**2 + stiffness[2] * a2**2) / c**2
 
