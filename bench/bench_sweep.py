@@ -28,8 +28,8 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hoseline.model.sweep import Obstacle  # noqa: E402
-from hoseline.procedures.sweep import run_sweep  # noqa: E402
-from hoseline.sweep_demo import JOUNCE_MM, STEER_DEG, STRUT_CENTRE, STRUT_HEIGHT, STRUT_RADIUS, demo_sweep  # noqa: E402
+from hoseline.procedures.sweep.quasi_static import run_sweep  # noqa: E402
+from hoseline.demos.sweep import JOUNCE_MM, STEER_DEG, STRUT_CENTRE, STRUT_HEIGHT, STRUT_RADIUS, demo_sweep  # noqa: E402
 
 
 def cylinder_mesh(triangles: int) -> Obstacle:

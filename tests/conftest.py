@@ -2,8 +2,8 @@
 
 import pytest
 
-from hoseline.demo import demo_problem
-from hoseline.procedures.placement import solve
+from hoseline.demos.thesis_hose import demo_problem
+from hoseline.procedures.placement.sequence import solve
 
 
 @pytest.fixture(scope="session")

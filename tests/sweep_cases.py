@@ -2,9 +2,9 @@
 
 import pytest
 
-from hoseline.procedures.sweep import run_sweep
+from hoseline.procedures.sweep.quasi_static import run_sweep
 from hoseline.report.sweep_report import write_sweep_report
-from hoseline.sweep_demo import demo_sweep
+from hoseline.demos.sweep import demo_sweep
 
 SEGMENTS = 20
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from hoseline.demo import GOODYEAR_5052, SHEAR_MODULUS_5052, YOUNGS_MODULUS_5052
+from hoseline.demos.thesis_hose import GOODYEAR_5052, SHEAR_MODULUS_5052, YOUNGS_MODULUS_5052
 from hoseline.io import adams_cmd
 from hoseline.io.adams_cmd import (
     AdamsFileError,

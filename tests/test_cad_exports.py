@@ -31,7 +31,9 @@ from OCP.TopoDS import TopoDS
 from typer.testing import CliRunner
 
 from hoseline import cli
-from hoseline.io import exports
+from hoseline.commands import common
+from hoseline.procedures.placement import sequence as placement
+from hoseline.io import export_names, exports
 from hoseline.io.iges_mounts import read_named_points
 from hoseline.io.mesh import CHORD_TOLERANCE_MM, tube_mesh
 from hoseline.io.occt import quiet
@@ -44,7 +46,7 @@ STATION_TOLERANCE_MM = 0.01
 def exported(twisted_hose, tmp_path_factory):
     """Every export of the twisted hose, written once into one folder."""
     folder = tmp_path_factory.mktemp("exports")
-    files = exports.write_exports(twisted_hose, folder, list(exports.FILE_NAMES))
+    files = exports.write_exports(twisted_hose, folder, list(export_names.FILE_NAMES))
     assert [file.name for file in files] == list(exports.FILE_NAMES.values())
     return folder
 
@@ -187,11 +189,11 @@ def test_a_fold_is_refused_and_nothing_is_written(twisted_hose, tmp_path):
 
 
 def test_format_names():
-    assert exports.parse_formats("iges, STP,glb,cmd,iges") == ["iges", "step", "gltf", "adams"]
-    assert exports.parse_formats("all") == list(exports.FILE_NAMES)
-    assert exports.parse_formats("none") == []
+    assert export_names.parse_formats("iges, STP,glb,cmd,iges") == ["iges", "step", "gltf", "adams"]
+    assert export_names.parse_formats("all") == list(export_names.FILE_NAMES)
+    assert export_names.parse_formats("none") == []
     with pytest.raises(ValueError, match="unknown export format 'dxf': choose from iges, step"):
-        exports.parse_formats("iges,dxf")
+        export_names.parse_formats("iges,dxf")
 
 
 def test_cli_solve_exports_beside_the_results(tmp_path):
@@ -210,10 +212,10 @@ def test_cli_solve_exports_beside_the_results(tmp_path):
 def test_cli_unknown_export_exits_2_before_solving(tmp_path, monkeypatch):
     from cases import THESIS_TOML, write
 
-    monkeypatch.setattr(cli.placement, "solve", lambda *a, **k: pytest.fail("solved despite a bad --export"))
+    monkeypatch.setattr(placement, "solve", lambda *a, **k: pytest.fail("solved despite a bad --export"))
     problem = write(tmp_path / "brake.toml", THESIS_TOML)
     result = CliRunner().invoke(cli.app, ["solve", str(problem), "-o", str(tmp_path / "out"), "--export", "iges,dwg"])
-    assert result.exit_code == cli.BAD_INPUT
+    assert result.exit_code == common.BAD_INPUT
     assert "unknown export format 'dwg'" in result.output
     assert not (tmp_path / "out").exists()
 
@@ -221,10 +223,10 @@ def test_cli_unknown_export_exits_2_before_solving(tmp_path, monkeypatch):
 def test_cli_export_failure_exits_4_and_writes_nothing(tmp_path, monkeypatch):
     from cases import THESIS_TOML, write
 
-    solve = cli.placement.solve
-    monkeypatch.setattr(cli.placement, "solve", lambda problem, **k: replace(solve(problem, **k), min_bend_radius=-1.0))
+    solve = placement.solve
+    monkeypatch.setattr(placement, "solve", lambda problem, **k: replace(solve(problem, **k), min_bend_radius=-1.0))
     problem = write(tmp_path / "brake.toml", THESIS_TOML)
     result = CliRunner().invoke(cli.app, ["solve", str(problem), "-o", str(tmp_path / "out"), "-e", "step"])
-    assert result.exit_code == cli.EXPORT_FAILED
+    assert result.exit_code == common.EXPORT_FAILED
     assert "export failed, nothing written: hose.step" in result.output
     assert not (tmp_path / "out").exists()

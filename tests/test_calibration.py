@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from validation_cases import EI, FACTOR, RADIUS, brake_hose, scanned
 
-from hoseline.procedures.calibration import ScanCase, _relative_std, calibrate
-from hoseline.procedures.centerline_fit import fit_centerline
+from hoseline.procedures.scans.calibration import ScanCase, _relative_std, calibrate
+from hoseline.procedures.scans.centerline_fit import fit_centerline
 
 
 @pytest.fixture(scope="module")

@@ -9,9 +9,11 @@ import pytest
 from cases import BAD_EDITS, THESIS_TOML, bad_toml, write
 from typer.testing import CliRunner
 
-from hoseline import cli, demo
+from hoseline import cli
+from hoseline.commands import common
+from hoseline.demos import thesis_hose as demo
 from hoseline.io.problem_file import load_problem, problem_to_dict
-from hoseline.procedures import placement
+from hoseline.procedures.placement import sequence as placement
 
 runner = CliRunner()
 
@@ -26,7 +28,7 @@ def run(*args):
 def test_bad_problem_file_exits_2_and_writes_nothing(tmp_path, old, new, fragments):
     problem = write(tmp_path / "bad.toml", bad_toml(old, new))
     code, output = run("solve", problem, "-o", tmp_path / "out")
-    assert code == cli.BAD_INPUT
+    assert code == common.BAD_INPUT
     assert not (tmp_path / "out").exists()
     assert output.startswith("error: ")
     for fragment in fragments:
@@ -36,7 +38,7 @@ def test_bad_problem_file_exits_2_and_writes_nothing(tmp_path, old, new, fragmen
 
 def test_missing_problem_file_exits_2(tmp_path):
     code, output = run("solve", tmp_path / "nope.toml", "-o", tmp_path / "out")
-    assert code == cli.BAD_INPUT
+    assert code == common.BAD_INPUT
     assert "cannot read problem file" in output and "nope.toml" in output
     assert not (tmp_path / "out").exists()
 
@@ -47,7 +49,7 @@ def test_solver_failure_exits_3_and_writes_nothing(tmp_path, monkeypatch):
 
     monkeypatch.setattr(placement, "solve", fail)
     code, output = run("solve", write(tmp_path / "brake.toml", THESIS_TOML), "-o", tmp_path / "out", "--quiet")
-    assert code == cli.SOLVER_FAILED
+    assert code == common.SOLVER_FAILED
     assert "the solver failed: continuation stalled at twist fraction 0.5" in output
     assert not (tmp_path / "out").exists()
 
@@ -60,7 +62,7 @@ def test_unwritable_output_exits_2_before_solving(tmp_path, monkeypatch):
     blocker = write(tmp_path / "out", "a file where the output directory should go")
     for out in (blocker, blocker / "inner"):
         code, output = run("solve", write(tmp_path / "brake.toml", THESIS_TOML), "-o", out, "--quiet")
-        assert code == cli.BAD_INPUT, output
+        assert code == common.BAD_INPUT, output
         assert "cannot write to" in output and "is a file, not a directory" in output
 
 

@@ -7,7 +7,7 @@ from typer.testing import CliRunner
 from validation_cases import brake_hose, scanned
 
 from hoseline import cli
-from hoseline.commands import compare
+from hoseline.commands import common
 from hoseline.io.problem_file import load_problem, problem_to_toml
 from hoseline.io.scans import write_ply
 
@@ -53,7 +53,7 @@ def test_check_exits_5_when_a_limit_is_exceeded(tmp_path):
     problem, scans = files(tmp_path)
     code, output = run("compare", problem, scans[1], "--twist", 180, "--max-mean", 0.01, "-o", tmp_path / "o",
                        "--check", "--quiet")
-    assert code == compare.VALIDATION_FAILED
+    assert code == common.CHECK_FAILED
     assert (tmp_path / "o" / "report.html").is_file()  # the report is written all the same
 
 
@@ -72,12 +72,12 @@ def test_bad_inputs_exit_2_and_write_nothing(tmp_path):
         ((problem, scans[0], "--max-deviation", "nan"), "--max-deviation nan: give a positive limit"),
     ]:
         code, output = run("compare", *args, "-o", tmp_path / "out")
-        assert code == cli.BAD_INPUT, output
+        assert code == common.BAD_INPUT, output
         assert fragment in output
     code, output = run("calibrate", problem, *scans, "--fit", "stiffness", "-o", tmp_path / "out")
-    assert code == cli.BAD_INPUT and "unknown parameter 'stiffness'" in output
+    assert code == common.BAD_INPUT and "unknown parameter 'stiffness'" in output
     code, output = run("calibrate", problem, *scans, "--fit", "", "-o", tmp_path / "out")
-    assert code == cli.BAD_INPUT and "no parameter given" in output
+    assert code == common.BAD_INPUT and "no parameter given" in output
     assert not (tmp_path / "out").exists()
 
 

@@ -14,7 +14,8 @@ from OCP.TCollection import TCollection_HAsciiString
 from typer.testing import CliRunner
 
 from hoseline import cli
-from hoseline.demo import THESIS_MOUNTS_IGES
+from hoseline.commands import common
+from hoseline.demos.thesis_hose import THESIS_MOUNTS_IGES
 from hoseline.io.iges_mounts import FittingLabels, IgesError, mounts_from_iges, read_named_points
 from hoseline.io.problem_file import ProblemFileError, load_problem, problem_to_dict
 
@@ -264,6 +265,6 @@ def test_problem_file_mounts_errors(iges_problem, old, new, fragments):
 def test_cli_refuses_a_damaged_iges_file_and_writes_nothing(tmp_path, iges_problem):
     save(tmp_path / "cad", parameter_line(thesis_lines(), 18, "116,-173.0x4,-7.0,-11.25,0;"))
     result = CliRunner().invoke(cli.app, ["solve", str(iges_problem), "-o", str(tmp_path / "out")])
-    assert result.exit_code == cli.BAD_INPUT
+    assert result.exit_code == common.BAD_INPUT
     assert "line 18" in result.output and "'-173.0x4' is not a number" in result.output
     assert not (tmp_path / "out").exists()

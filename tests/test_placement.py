@@ -123,7 +123,7 @@ def test_first_step_buckles_to_the_stable_side():
     """The first move compresses the straight hose; the side kept must be stable and not
     higher in energy than the other side."""
     from hoseline.mechanics.newton import solve_equilibrium, total_energy
-    from hoseline.procedures import placement
+    from hoseline.procedures.placement import sequence as placement
 
     problem = thesis_problem(0.0, 40)
     props = placement.rod_properties(problem)
@@ -215,7 +215,8 @@ def test_a_failing_solve_says_where_and_why(monkeypatch):
     """If Newton cannot converge along the path, the error names the phase, the fraction,
     the residual and the iterations, and no result is returned."""
     from hoseline.mechanics.newton import NewtonReport
-    from hoseline.procedures import continuation, placement
+    from hoseline.procedures.placement import continuation
+    from hoseline.procedures.placement import sequence as placement
 
     real_solve = continuation.solve_equilibrium
     real_relax = continuation.relax_to_stable
@@ -245,7 +246,7 @@ def test_a_failing_solve_says_where_and_why(monkeypatch):
 def test_a_fork_on_the_twist_path_is_not_stepped_over():
     """Twisting a U-bend a full turn passes a fork (stability lost near 207 deg).  The default
     step control must see it, as a fine one does, and land on the same equilibrium."""
-    from hoseline.procedures.continuation import StepControl
+    from hoseline.procedures.placement.continuation import StepControl
 
     hose = Hose(length=300.0, outer_diameter=10.0, bending_stiffness=1.5e5, torsional_stiffness=2.5e6, segments=50)
     problem = Problem(hose, Mount([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]), Mount([0.0, 80.0, 0.0], [1.0, 0.0, 0.0]), 360.0)

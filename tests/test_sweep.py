@@ -12,15 +12,16 @@ from sweep_cases import SEGMENTS, coarse_demo, small_sweep_result  # noqa: F401 
 from typer.testing import CliRunner
 
 from hoseline import cli
-from hoseline.commands import sweep as sweep_command
-from hoseline.demo import demo_problem
+from hoseline.commands import common
+from hoseline.demos import sweep as sweep_demo
+from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.sweep_file import SweepFileError, load_sweep
 from hoseline.model.motion import BodyMotion, Pose, Rotation, Stage, Translation, axis_angle_matrix, generated_motion
 from hoseline.model.sweep import Obstacle, SweepProblem
-from hoseline.procedures import sweep as sweep_procedure
-from hoseline.procedures.clearance import TriangleIndex
-from hoseline.procedures.continuation import PlacementError
-from hoseline.procedures.sweep import run_sweep
+from hoseline.procedures.sweep import quasi_static as sweep_procedure
+from hoseline.procedures.geometry.clearance import TriangleIndex
+from hoseline.procedures.placement.continuation import PlacementError
+from hoseline.procedures.sweep.quasi_static import run_sweep
 from hoseline.report.sweep_report import SWEEP_FILES
 
 runner = CliRunner()
@@ -181,9 +182,9 @@ def test_cli_sweep_writes_all_files_together(tmp_path):
 
 def test_cli_sweep_bad_input_exits_2_and_writes_nothing(tmp_path):
     code, output = run("sweep", sweep_folder(tmp_path, SWEEP_TOML.replace("knuckle.csv", "nope.csv")), "-o", tmp_path / "out")
-    assert code == cli.BAD_INPUT and "cannot read" in output
+    assert code == common.BAD_INPUT and "cannot read" in output
     code, output = run("sweep", "-o", tmp_path / "out")
-    assert code == cli.BAD_INPUT and "--demo" in output
+    assert code == common.BAD_INPUT and "--demo" in output
     assert not (tmp_path / "out").exists()
 
 
@@ -191,14 +192,14 @@ def test_cli_sweep_solver_failure_exits_3_and_writes_nothing(tmp_path, monkeypat
     def fail(sweep, **options):
         raise PlacementError("step to pose 2 failed")
 
-    monkeypatch.setattr(sweep_command, "run_sweep", fail)
+    monkeypatch.setattr(sweep_procedure, "run_sweep", fail)
     code, output = run("sweep", sweep_folder(tmp_path), "-o", tmp_path / "out", "-q")
-    assert code == cli.SOLVER_FAILED and "step to pose 2 failed" in output
+    assert code == common.SOLVER_FAILED and "step to pose 2 failed" in output
     assert not (tmp_path / "out").exists()
 
 
 def test_cli_sweep_demo_with_progress(tmp_path, monkeypatch):
-    monkeypatch.setattr(sweep_command, "demo_sweep", coarse_demo)
+    monkeypatch.setattr(sweep_demo, "demo_sweep", coarse_demo)
     code, output = run("sweep", "--demo", "-o", tmp_path / "demo")
     assert code == 0, output
     assert "clearance to strut" in output and (tmp_path / "demo" / "report.html").is_file()

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from validation_cases import RADIUS, brake_hose, scanned
 
-from hoseline.procedures.centerline_fit import fit_centerline
-from hoseline.procedures.deviation import Thresholds, closest_on_polyline, deviation
-from hoseline.procedures.scatter import scatter_envelope
-from hoseline.procedures.twist_path import follow_twist
+from hoseline.procedures.scans.centerline_fit import fit_centerline
+from hoseline.procedures.scans.deviation import Thresholds, closest_on_polyline, deviation
+from hoseline.procedures.scans.scatter import scatter_envelope
+from hoseline.procedures.placement.twist_path import follow_twist
 
 
 def test_centerline_and_radius_from_a_one_sided_noisy_scan_with_a_gap():

@@ -4,7 +4,7 @@ import numpy as np
 
 from hoseline import Hose, Mount, Problem, solve
 from hoseline.model.hose import isotropic_torsional_stiffness
-from hoseline.procedures.synthetic_scan import ScanDefects, synthetic_scan
+from hoseline.procedures.scans.synthetic_scan import ScanDefects, synthetic_scan
 
 EI = 149563.0  # N*mm^2
 FACTOR = 25.0

@@ -1,7 +1,6 @@
 """`hoseline sweep sweep.toml -o out/` (or `--demo`): the hose through the motion of its mounts, and the report.
 
-Registers on the Typer app of hoseline.cli (imported at the end of cli.py).  Exit codes
-as for `solve`: 0 done, 2 bad input (sweep file, pose tables, meshes, paths), 3 the solver
+Exit codes as for `solve`: 0 done, 2 bad input (sweep file, pose tables, meshes, paths), 3 the solver
 failed.  On an error nothing is written; otherwise all files appear together.
 """
 
@@ -13,15 +12,9 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from hoseline.cli import BAD_INPUT, OUT_HELP, QUIET_HELP, _errors_to_exit_codes, _fail, _progress, _read_input, app
-from hoseline.io.sweep_file import SweepFileError, load_sweep
-from hoseline.procedures.sweep import run_sweep
-from hoseline.procedures.sweep_result import SweepResult
-from hoseline.report.sweep_report import write_sweep_report
-from hoseline.sweep_demo import demo_sweep
+from hoseline.commands.common import BAD_INPUT, OUT_HELP, QUIET_HELP, errors_to_exit_codes, fail, progress_bar, read_input
 
 
-@app.command("sweep")
 def sweep_command(
     sweep_file: Path = typer.Argument(None, help="TOML sweep file: a problem file with [\\[bodies]] and [\\[obstacles]] "
                                                  "(see docs/sweep.md)"),
@@ -30,16 +23,21 @@ def sweep_command(
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
 ) -> None:
     """Carry the hose through the motion of its mounts; write report.html, PNGs, envelope.stl and the numbers."""
+    from hoseline.demos.sweep import demo_sweep
+    from hoseline.io.sweep_file import SweepFileError, load_sweep
+    from hoseline.procedures.sweep.quasi_static import run_sweep
+    from hoseline.report.sweep_report import write_sweep_report
+
     if (sweep_file is None) == (not demo):
-        raise _fail("give either a sweep file or --demo (not both)", BAD_INPUT)
+        raise fail("give either a sweep file or --demo (not both)", BAD_INPUT)
     if demo:
         sweep, text = demo_sweep(), ""
     else:
-        sweep = _read_input(load_sweep, sweep_file, "sweep file", (SweepFileError,))
+        sweep = read_input(load_sweep, sweep_file, "sweep file", (SweepFileError,))
         text = sweep_file.read_text(encoding="utf-8")
 
-    with _errors_to_exit_codes(out):
-        with _progress(quiet) as progress:
+    with errors_to_exit_codes(out):
+        with progress_bar(quiet) as progress:
             result = run_sweep(sweep, progress=progress)
         write_sweep_report(result, out, text)
     if not quiet:
@@ -47,8 +45,8 @@ def sweep_command(
         Console().print(f"wrote {out / 'report.html'} and the data beside it")
 
 
-def _worst_table(result: SweepResult) -> Table:
-    """The worst cases as a Rich table."""
+def _worst_table(result) -> Table:
+    """The worst cases of a SweepResult as a Rich table."""
     table = Table(title=f"{result.sweep.problem.name}: {result.pose_count} poses, worst cases")
     for column in ("quantity", "worst", "limit", "pose"):
         table.add_column(column)

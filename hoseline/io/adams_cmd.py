@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from hoseline.model.hose import DEFAULT_POISSON_RATIO, Hose
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 LENGTH_UNITS_MM = {"mm": 1.0, "cm": 10.0, "meter": 1000.0, "km": 1.0e6, "inch": 25.4, "foot": 304.8}
 ANGLE_UNITS_RAD = {"deg": math.pi / 180.0, "rad": 1.0}

@@ -18,18 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from hoseline.io.atomic import staged_directory, write_bytes
-from hoseline.procedures.result import Result
-
-FILE_NAMES = {
-    "iges": "hose.igs",
-    "step": "hose.step",
-    "stl": "hose.stl",
-    "ply": "hose.ply",
-    "gltf": "hose.glb",
-    "adams": "hose.cmd",
-}
-ALIASES = {"igs": "iges", "stp": "step", "glb": "gltf", "cmd": "adams"}
-
+from hoseline.io.export_names import FILE_NAMES
+from hoseline.procedures.placement.result import Result
 
 class ExportError(RuntimeError):
     """An export could not be made (e.g. the tube cannot be swept); nothing was written."""
@@ -43,24 +33,6 @@ class ExportedFile:
     size: int
     seconds: float
 
-
-def parse_formats(text: str) -> list[str]:
-    """Format names from a comma-separated list such as "iges,step,stl" ("all" for every format).
-
-    Accepts the file extensions igs, stp, glb and cmd as well, and "none" for no export.
-    Raises ValueError naming an unknown format and listing the known ones.
-    """
-    names = []
-    for word in (part.strip().lower() for part in text.split(",")):
-        if word == "none":
-            continue
-        if word == "all":
-            names.extend(FILE_NAMES)
-        elif word in FILE_NAMES or word in ALIASES:
-            names.append(ALIASES.get(word, word))
-        elif word:
-            raise ValueError(f"unknown export format {word!r}: choose from {', '.join(FILE_NAMES)} (or all, none)")
-    return list(dict.fromkeys(names))
 
 
 def write_exports(result: Result, out_dir: str | Path, formats: list[str], beam_section=None) -> list[ExportedFile]:

@@ -27,7 +27,7 @@ from OCP.IGESGeom import IGESGeom_CopiousData
 from OCP.TCollection import TCollection_HAsciiString
 
 from hoseline.io.occt import centerline_spline, quiet, start_circle
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 XYZ_TRIPLES = 2  # copious data type: (x, y, z) per point
 

@@ -16,7 +16,7 @@ import math
 import numpy as np
 import trimesh
 
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 MESH_FORMATS = ("stl", "ply", "glb")
 CHORD_TOLERANCE_MM = 0.01

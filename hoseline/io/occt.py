@@ -15,7 +15,7 @@ from OCP.GeomAPI import GeomAPI_Interpolate
 from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Vec
 from OCP.Message import Message, Message_Gravity
 
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 
 def quiet() -> None:

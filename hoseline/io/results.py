@@ -10,7 +10,7 @@ import numpy as np
 
 from hoseline.io.atomic import staged_directory, write_text
 from hoseline.io.problem_file import problem_to_dict
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 STATION_UNITS = {
     "s": "mm",

@@ -24,7 +24,7 @@ from OCP.TopoDS import TopoDS_Edge, TopoDS_Shape
 from OCP.XCAFDoc import XCAFDoc_DocumentTool
 
 from hoseline.io.occt import centerline_spline, quiet, start_circle
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 
 class SweepError(RuntimeError):

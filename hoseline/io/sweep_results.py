@@ -15,7 +15,7 @@ import numpy as np
 from hoseline.io.atomic import write_text
 from hoseline.io.problem_file import problem_to_dict
 from hoseline.io.results import _json, _plain
-from hoseline.procedures.sweep_result import SweepResult
+from hoseline.procedures.sweep.result import SweepResult
 
 
 def poses_csv(result: SweepResult) -> str:

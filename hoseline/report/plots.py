@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 
 from hoseline.io.atomic import write_bytes
 from hoseline.model.mounts import Mount
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 # (title, index of the horizontal axis, index of the vertical axis)
 VIEWS = (("top view (x-y)", 0, 1), ("front view (x-z)", 0, 2), ("side view (y-z)", 1, 2))

@@ -9,7 +9,7 @@ import numpy as np
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
-from hoseline.procedures.sweep_result import SweepResult
+from hoseline.procedures.sweep.result import SweepResult
 
 MAX_FRAMES = 200  # poses shown by the slider of the 3D view (evenly picked; the plots show all)
 LOCKED_COLOUR = "#1f4e9c"

@@ -13,7 +13,7 @@ import math
 import plotly.io
 from plotly.offline import get_plotlyjs
 
-from hoseline.procedures.sweep_result import SweepResult
+from hoseline.procedures.sweep.result import SweepResult
 from hoseline.report.sweep_figures import plots_figure, shown_poses, travel_axis, view_figure
 
 VIEW_ID = "view3d"

@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from hoseline.io.atomic import write_bytes
-from hoseline.procedures.sweep_result import SweepResult
+from hoseline.procedures.sweep.result import SweepResult
 from hoseline.report.plots import VIEWS, finish_view, png_bytes
 from hoseline.report.sweep_figures import FREE_COLOUR, LOCKED_COLOUR, OBSTACLE_COLOUR, VIOLATION_COLOUR, travel_axis
 

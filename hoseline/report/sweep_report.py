@@ -14,8 +14,8 @@ from pathlib import Path
 from hoseline.io.atomic import staged_directory, write_text
 from hoseline.io.obstacle_mesh import write_stl
 from hoseline.io.sweep_results import write_sweep_data
-from hoseline.procedures.envelope import swept_envelope
-from hoseline.procedures.sweep_result import SweepResult
+from hoseline.procedures.sweep.envelope import swept_envelope
+from hoseline.procedures.sweep.result import SweepResult
 from hoseline.report.sweep_html import sweep_report_html
 from hoseline.report.sweep_png import plot_sweep_curves, plot_sweep_view
 

@@ -6,7 +6,7 @@ from collections.abc import Callable, Sequence
 
 from rich.table import Table
 
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 
 def _number(value: float | None, digits: int = 4) -> str:

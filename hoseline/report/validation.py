@@ -21,10 +21,10 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from hoseline.io.atomic import staged_directory, write_bytes, write_text
-from hoseline.procedures.calibration import Calibration
-from hoseline.procedures.scatter import ScatterEnvelope
-from hoseline.procedures.twist_path import TwistPath
-from hoseline.procedures.validation import Comparison
+from hoseline.procedures.scans.calibration import Calibration
+from hoseline.procedures.scans.scatter import ScatterEnvelope
+from hoseline.procedures.placement.twist_path import TwistPath
+from hoseline.procedures.scans.validation import Comparison
 from hoseline.report.plots import VIEWS, finish_view, png_bytes
 
 OVERLAY_POINTS = 20000  # scan points drawn in the 3D overlay, at most (all scans together)

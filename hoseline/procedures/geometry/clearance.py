@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from hoseline.procedures.proximity import segment_plane_gap, segment_triangle_distance
+from hoseline.procedures.geometry.proximity import segment_plane_gap, segment_triangle_distance
 
 LEAF_SIZE = 4
 STACK_SIZE = 256  # far above the depth of a median-split tree (about log2(triangles / LEAF_SIZE))

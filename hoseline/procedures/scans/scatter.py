@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hoseline.procedures.deviation import closest_on_polyline
+from hoseline.procedures.scans.deviation import closest_on_polyline
 
 
 @dataclass

@@ -29,12 +29,12 @@ from hoseline.mechanics.rotations import extrapolate_frames
 from hoseline.model.motion import Pose, interpolate
 from hoseline.model.mounts import Mount, single_plane_offset
 from hoseline.model.sweep import SweepProblem
-from hoseline.procedures.clearance import TriangleIndex
-from hoseline.procedures.continuation import ContinuationLog, Progress, StepControl, follow
-from hoseline.procedures.hose_health import hose_health
-from hoseline.procedures.placement import rod_properties, solve, weight_vector
-from hoseline.procedures.result import Result
-from hoseline.procedures.sweep_result import ObstacleClearance, Snap, SweepResult
+from hoseline.procedures.geometry.clearance import TriangleIndex
+from hoseline.procedures.placement.continuation import ContinuationLog, Progress, StepControl, follow
+from hoseline.procedures.placement.hose_health import hose_health
+from hoseline.procedures.placement.sequence import rod_properties, solve, weight_vector
+from hoseline.procedures.placement.result import Result
+from hoseline.procedures.sweep.result import ObstacleClearance, Snap, SweepResult
 
 JUMP_FACTOR = 3.0  # a step moving a station more than this times the mounts' movement is followed in sub-steps
 CAREFUL = StepControl(first=0.1, largest=0.1)  # sub-steps of a suspicious step

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hoseline.procedures.centerline_fit import CenterlineFit, fit_centerline
-from hoseline.procedures.deviation import Deviation, Thresholds, deviation
-from hoseline.procedures.result import Result
+from hoseline.procedures.scans.centerline_fit import CenterlineFit, fit_centerline
+from hoseline.procedures.scans.deviation import Deviation, Thresholds, deviation
+from hoseline.procedures.placement.result import Result
 
 
 @dataclass

@@ -14,7 +14,7 @@ from dataclasses import replace
 import numpy as np
 import trimesh
 
-from hoseline.demo import GOODYEAR_5052, demo_problem
+from hoseline.demos.thesis_hose import GOODYEAR_5052, demo_problem
 from hoseline.model.motion import Rotation, Translation, generated_motion
 from hoseline.model.sweep import Obstacle, SweepProblem
 

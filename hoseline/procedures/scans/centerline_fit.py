@@ -32,7 +32,7 @@ from scipy.optimize import least_squares
 from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 from scipy.spatial import cKDTree, distance_matrix
 
-from hoseline.procedures.deviation import closest_on_polyline
+from hoseline.procedures.scans.deviation import closest_on_polyline
 
 MIN_ARC_FOR_RADIUS_DEG = 120.0  # below this coverage the radius and the axis cannot be told apart
 MIN_SECTION_POINTS = 25

@@ -27,11 +27,11 @@ from hoseline.mechanics.newton import end_frame_of, node_positions, solve_equili
 from hoseline.mechanics.rod import RodState
 from hoseline.model.hose import Hose, isotropic_torsional_stiffness
 from hoseline.model.problem import Problem
-from hoseline.procedures.continuation import PlacementError
-from hoseline.procedures.deviation import Deviation, closest_on_polyline, deviation
-from hoseline.procedures.placement import PlacementPath, rod_properties, solve
+from hoseline.procedures.placement.continuation import PlacementError
+from hoseline.procedures.scans.deviation import Deviation, closest_on_polyline, deviation
+from hoseline.procedures.placement.sequence import PlacementPath, rod_properties, solve
+from hoseline.procedures.scans.parameters import PARAMETERS
 
-PARAMETERS = {"bending_stiffness": "N*mm^2", "torsion_factor": "", "mass_per_length": "kg/m", "length": "mm"}
 UNIDENTIFIABLE_RELATIVE_STD = 0.25
 LOG_BOUND = math.log(100.0)  # no parameter moves by more than 100x
 

@@ -15,7 +15,7 @@ from dataclasses import replace
 from hoseline.mechanics.newton import RodProperties, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.mechanics.stiffeners import scaled_springs
-from hoseline.procedures.continuation import ContinuationLog, PlacementError, Progress, push_along_modes, relax_to_stable
+from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, push_along_modes, relax_to_stable
 
 SMALLEST_STEP = 1e-3  # of the spring strength
 

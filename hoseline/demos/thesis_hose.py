@@ -22,12 +22,12 @@ from hoseline.io.iges_mounts import mounts_from_iges
 from hoseline.io.problem_file import problem_to_toml
 from hoseline.io.results import write_results
 from hoseline.model import Hose, Problem
-from hoseline.procedures.placement import solve
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.sequence import solve
+from hoseline.procedures.placement.result import Result
 from hoseline.report.plots import plot_shapes
 
 # The thesis' appendix A: points A, B, C, D (entity 116); the hose leaves B along A->B and D along D->C.
-THESIS_MOUNTS_IGES = Path(__file__).parent / "data" / "mounts_thesis_appendix_a.igs"
+THESIS_MOUNTS_IGES = Path(__file__).parents[1] / "data" / "mounts_thesis_appendix_a.igs"
 
 # Goodyear5052 (thesis appendix C): E = 292.7985 N/mm^2 with I = 510.8053 mm^4,
 # G = 96.12 N/mm^2 with the calibrated torsion constant 25540.26 mm^4 (25x the isotropic 2I).

@@ -30,7 +30,7 @@ from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rota
 from hoseline.mechanics.stiffeners import spring_set
 from hoseline.model.hose import Hose
 from hoseline.model.problem import Problem
-from hoseline.procedures.continuation import (
+from hoseline.procedures.placement.continuation import (
     ContinuationLog,
     PlacementError,
     Progress,
@@ -38,10 +38,10 @@ from hoseline.procedures.continuation import (
     follow,
     relax_to_stable,
 )
-from hoseline.procedures.result import Result
-from hoseline.procedures.stiffening import phase_in_springs
-from hoseline.procedures.stations import build_result
-from hoseline.procedures.symmetry import equivalent_states
+from hoseline.procedures.placement.result import Result
+from hoseline.procedures.placement.stiffening import phase_in_springs
+from hoseline.procedures.placement.stations import build_result
+from hoseline.procedures.placement.symmetry import equivalent_states
 
 __all__ = ["solve", "PlacementError", "rod_properties"]
 

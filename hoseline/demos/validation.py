@@ -22,13 +22,13 @@ from hoseline.io.scans import write_ply
 from hoseline.model import Hose, Mount, Problem
 from hoseline.model.hose import isotropic_torsional_stiffness
 from hoseline.model.stiffeners import thesis_preset
-from hoseline.procedures.calibration import Calibration, ScanCase, calibrate
-from hoseline.procedures.centerline_fit import fit_centerline
-from hoseline.procedures.placement import solve
-from hoseline.procedures.scatter import ScatterEnvelope, scatter_envelope
-from hoseline.procedures.synthetic_scan import ScanDefects, synthetic_scan
-from hoseline.procedures.twist_path import TwistPath, follow_twist
-from hoseline.procedures.validation import Comparison, compare_scan
+from hoseline.procedures.scans.calibration import Calibration, ScanCase, calibrate
+from hoseline.procedures.scans.centerline_fit import fit_centerline
+from hoseline.procedures.placement.sequence import solve
+from hoseline.procedures.scans.scatter import ScatterEnvelope, scatter_envelope
+from hoseline.procedures.scans.synthetic_scan import ScanDefects, synthetic_scan
+from hoseline.procedures.placement.twist_path import TwistPath, follow_twist
+from hoseline.procedures.scans.validation import Comparison, compare_scan
 from hoseline.report.validation import write_validation_report
 
 EI = 292.7985 * 510.8053  # N*mm^2, thesis appendix C

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hoseline.model.sweep import Obstacle, SweepProblem
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.result import Result
 
 
 @dataclass

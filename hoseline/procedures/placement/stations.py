@@ -13,8 +13,8 @@ from hoseline.mechanics.rod import Clamps, RodState, centerline, gravity_energy
 from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model.mounts import single_plane_offset
 from hoseline.model.problem import Problem
-from hoseline.procedures.hose_health import station_moments
-from hoseline.procedures.result import Result
+from hoseline.procedures.placement.hose_health import station_moments
+from hoseline.procedures.placement.result import Result
 
 NEUTRAL_MARGIN = 1e-6  # margins below this fraction of EI/L^2 are rounding of an exact zero
 
