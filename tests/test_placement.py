@@ -254,7 +254,10 @@ def test_a_fork_on_the_twist_path_is_not_stepped_over():
     fine = solve(problem, control=StepControl(first=0.005, largest=0.005))
     for result in (default, fine):
         assert any(event.startswith("twist: stability lost") for event in result.events), result.events
-        assert not result.unique
+        # the fork is reported as met on the path; the verdict is about the final shape: the
+        # branch not taken, followed to 360 deg, ends on the same shape, so it is unique
+        assert any(fork.startswith("twist at fraction") for fork in result.path_forks), result.path_forks
+        assert result.unique == (not result.other_equilibria)
     assert default.elastic_energy == pytest.approx(fine.elastic_energy, rel=1e-9)
     # the side taken at the fork is decided by rounding: the same shape, or its image in the
     # plane y = 40 mm that swaps the two mounts (an equally good answer)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import typer
@@ -22,20 +23,27 @@ def solve_command(
     out: Path = typer.Option(..., "-o", "--out", help=OUT_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
     export: str = typer.Option("none", "--export", "-e", help=EXPORT_HELP),
+    accuracy: str = typer.Option(None, "--accuracy", help="largest station error wanted, mm (e.g. 0.01mm): the "
+                                                          "segment count is raised until the estimate meets it"),
 ) -> None:
     """Place the hose of a problem file; write centerline.csv, result.json and the exports asked for."""
     from hoseline.io.atomic import staged_directory
     from hoseline.io.exports import write_exports
     from hoseline.io.problem_file import ProblemFileError, load_problem
     from hoseline.io.results import write_results
+    from hoseline.procedures.placement.refinement import solve_to_accuracy
     from hoseline.procedures.placement.sequence import solve
     from hoseline.report.table import summary_table
 
     formats = export_formats(export)
+    wanted = None if accuracy is None else accuracy_mm(accuracy)
     problem = read_input(load_problem, problem_file, "problem file", (ProblemFileError,))
     with errors_to_exit_codes(out):
         with progress_bar(quiet) as progress:
-            result = solve(problem, progress=progress)
+            if wanted is None:
+                result = solve(problem, progress=progress)
+            else:
+                result = solve_to_accuracy(problem, wanted, progress=progress)
         with staged_directory(out) as staging:
             write_results(result, staging)
             exported = write_exports(result, staging, formats)
@@ -43,6 +51,18 @@ def solve_command(
         Console().print(summary_table([result], [problem.name]))
         Console().print(f"wrote {out / 'centerline.csv'} and {out / 'result.json'}")
         print_exports(out, exported)
+
+
+def accuracy_mm(text: str) -> float:
+    """The --accuracy value in mm ("0.01mm" or "0.01"), or exit 2 saying what to give."""
+    number = text.strip().lower().removesuffix("mm").strip()
+    try:
+        value = float(number)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0.0):
+        raise fail(f"--accuracy {text!r}: give a positive length in mm, e.g. 0.01mm", BAD_INPUT)
+    return value
 
 
 def export_formats(text: str) -> list[str]:

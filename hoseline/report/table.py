@@ -19,6 +19,19 @@ def _fixed(value: float | None, decimals: int = 2) -> str:
     return "n/a" if value is None else f"{round(value, decimals) + 0.0:.{decimals}f}"
 
 
+def _uniqueness(result: Result) -> str:
+    """yes, or no with what else the hose can do."""
+    if result.unique:
+        return "yes"
+    if not result.other_equilibria:
+        return "no: neutral (a family of shapes)"
+    same = sum(other.same_clamps for other in result.other_equilibria)
+    parts = [f"{same} other shape(s) of the same assembly"] if same else []
+    if len(result.other_equilibria) > same:
+        parts.append(f"{len(result.other_equilibria) - same} with the fitting clocked differently")
+    return "no: " + ", ".join(parts)
+
+
 # (quantity, unit, how to read it off a Result)
 ROWS: tuple[tuple[str, str, Callable[[Result], str]], ...] = (
     ("end twist", "deg", lambda r: _fixed(r.problem.end_twist_deg, 1)),
@@ -26,7 +39,8 @@ ROWS: tuple[tuple[str, str, Callable[[Result], str]], ...] = (
     ("elastic energy", "N*mm", lambda r: _number(r.elastic_energy)),
     ("gravity energy", "N*mm", lambda r: _number(r.gravity_energy)),
     ("stability margin", "N/rad^2", lambda r: f"{_number(r.stability_margin)} ({'stable' if r.stable else 'UNSTABLE'})"),
-    ("unique shape", "", lambda r: "yes" if r.unique else "no: equal-energy twin"),
+    ("unique shape", "", lambda r: _uniqueness(r)),
+    ("forks on the path", "", lambda r: str(len(r.path_forks))),
     ("min inside bend radius", "mm", lambda r: _fixed(r.min_bend_radius)),
     ("bend radius margin", "mm", lambda r: _fixed(r.bend_radius_margin)),
     ("single-plane offset", "mm", lambda r: _fixed(r.single_plane_offset)),
@@ -34,6 +48,7 @@ ROWS: tuple[tuple[str, str, Callable[[Result], str]], ...] = (
     ("max bending moment", "N*mm", lambda r: _number(float(r.bending_moment.max()))),
     ("iterations / steps", "", lambda r: f"{r.iterations} / {r.steps}"),
     ("residual", "", lambda r: _number(r.residual, 2)),
+    ("discretisation error", "mm", lambda r: _number(r.discretisation_error, 2)),
     ("time", "s", lambda r: _fixed(r.wall_time)),
 )
 

@@ -38,14 +38,55 @@ class PlacementError(RuntimeError):
     """The placement could not be completed; the message says in which phase, where and why."""
 
 
+EQUAL_ENERGY = 1e-9  # relative to the energy: energies closer than this are equal (rounding)
+
+
+@dataclass
+class Fork:
+    """A fork met along a path: several distinct stable equilibria next to each other, one taken.
+
+    phase, fraction: where (the path's name and its fraction in [0, 1]).  others: the stable
+    states not taken, in order of energy.  energy_gaps: their energy above the one taken, N*mm.
+    equal_energy: the nearest other is of equal energy (a symmetric fork: rounding could have
+    taken either side).
+    """
+
+    phase: str
+    fraction: float
+    others: list[RodState]
+    energy_gaps: list[float]
+
+    @property
+    def equal_energy(self) -> bool:
+        return bool(self.energy_gaps) and self.energy_gaps[0] == 0.0
+
+    def describe(self) -> str:
+        """One sentence for the result's forks on the path."""
+        kind = "a symmetric fork (branches of equal energy)" if self.equal_energy else "a fork"
+        gaps = ", ".join(f"{gap:.4g}" for gap in self.energy_gaps)
+        return (f"{self.phase} at fraction {self.fraction:.4f}: {kind}; took the branch of lowest energy, "
+                f"{len(self.others)} other stable branch(es) {gaps} N*mm higher")
+
+
 @dataclass
 class ContinuationLog:
-    """Counters and events accumulated over all phases."""
+    """Counters, events and the forks met, accumulated over all phases."""
 
     iterations: int = 0
     steps: int = 0
     events: list[str] = field(default_factory=list)
-    equal_energy_choice: bool = False  # a branch was chosen between distinct stable states of equal energy
+    forks: list[Fork] = field(default_factory=list)
+
+    def record_fork(self, phase: str, fraction: float, props: "RodProperties", clamps: Clamps,
+                    distinct: list[RodState]) -> None:
+        """Note a fork when relax_to_stable found more than one distinct stable state (the first is the one taken)."""
+        if len(distinct) < 2:
+            return
+        energies = [total_energy(props, clamps, state) for state in distinct]
+        scale = max(abs(energies[0]), 1e-300)
+        gaps = [max(0.0, energy - energies[0]) for energy in energies[1:]]
+        gaps = [0.0 if gap <= EQUAL_ENERGY * scale else gap for gap in gaps]
+        self.forks.append(Fork(phase, fraction, distinct[1:], gaps))
 
 
 @dataclass(frozen=True)
@@ -91,15 +132,13 @@ def relax_to_stable(
     # lowest energy first; energies within 1e-9 count as equal and keep the candidates' order, so
     # rounding cannot decide between the two sides of a symmetric fork
     lowest = min(energy for energy, _ in stable)
-    tie = 1e-9 * max(abs(lowest), 1e-300)
+    tie = EQUAL_ENERGY * max(abs(lowest), 1e-300)
     stable = [pair for _, pair in sorted(enumerate(stable), key=lambda item: (round((item[1][0] - lowest) / tie), item[0]))]
     distinct: list[tuple[float, RodState]] = []
     for energy, state in stable:
         nodes = node_positions(props, clamps, state)
         if all(np.max(np.abs(nodes - node_positions(props, clamps, other))) > 1e-6 * props.length for _, other in distinct):
             distinct.append((energy, state))
-    if len(distinct) > 1 and distinct[1][0] - distinct[0][0] <= 1e-9 * abs(distinct[0][0]):
-        log.equal_energy_choice = True
     return stable[0][1], [state for _, state in distinct]
 
 
@@ -218,6 +257,7 @@ def _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, 
             f"{unstable_t:.4f} and no stable equilibrium was found next to it"
         )
     best, distinct = relaxed
+    log.record_fork(phase, t_next, props, clamps, distinct)
     before = node_positions(props, clamps, trial)
     after = node_positions(props, clamps, best)
     jump = float(np.max(np.linalg.norm(after - before, axis=1)))

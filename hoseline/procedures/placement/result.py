@@ -15,6 +15,38 @@ import numpy as np
 from hoseline.model.problem import Problem
 
 
+@dataclass(frozen=True)
+class OtherEquilibrium:
+    """Another stable equilibrium at the same mounts, length and twist as a Result.
+
+    origin: where it comes from (a fork of the placement path, the mounts' symmetry).
+    max_distance: largest distance between corresponding stations of the two shapes, mm.
+    energy_gap: its energy minus the Result's, N*mm (0: an equally likely shape).
+    lock_angle_deg: the lock angle on its way, degrees.
+    same_clamps: True when its end fitting is clamped exactly as the Result's (a second shape
+        of one physical assembly); False when its lock angle differs, so the fitting is clocked
+        differently at the same twist.
+    """
+
+    origin: str
+    max_distance: float
+    energy_gap: float
+    lock_angle_deg: float
+    same_clamps: bool
+
+    def describe(self) -> str:
+        """One sentence for reports."""
+        clamps = ("the same clamping" if self.same_clamps
+                  else f"the end fitting locked at {self.lock_angle_deg:.2f} deg, so clocked differently")
+        return (f"another stable shape up to {self.max_distance:.3f} mm away, {self.energy_gap:+.4g} N*mm of energy, "
+                f"with {clamps}: {self.origin}")
+
+    def summary(self) -> dict:
+        """For result.json (user units)."""
+        return {"origin": self.origin, "max_distance_mm": self.max_distance, "energy_gap_Nmm": self.energy_gap,
+                "lock_angle_deg": self.lock_angle_deg, "same_clamps": self.same_clamps}
+
+
 @dataclass
 class Result:
     """Static equilibrium of a hose placed between two mounts.
@@ -48,8 +80,14 @@ class Result:
     length_error: relative error of the centreline length (exact inextensibility: rounding only).
     iterations: Newton iterations in total; steps: continuation steps in total.
     wall_time: seconds for the whole placement.
-    unique: False when a second stable equilibrium of equal energy exists (e.g. a mirror image).
-    alternatives: other stable equilibria found (each a Result), when asked for.
+    unique: True when no other stable equilibrium was found at the same mounts, length and twist:
+        none at the mounts' symmetry images and none at the end of the branches not taken at
+        forks of the path; False also for a neutral margin (a continuous family of shapes).
+    other_equilibria: the other stable equilibria found (OtherEquilibrium: origin, distance, energy).
+    path_forks: the forks met along the placement path, whether or not their branches meet again.
+    alternatives: the other stable equilibria as Results, when asked for.
+    discretisation_error: estimated largest station error from the segment count, mm (Richardson
+        extrapolation from one solve with half the segments); None if not estimated.
     events: human-readable log of what happened along the continuation (bifurcations, branch switches).
     residual: final relative residual of the force and moment balance.
     """
@@ -83,8 +121,11 @@ class Result:
     wall_time: float
     residual: float
     unique: bool = True
+    other_equilibria: list[OtherEquilibrium] = field(default_factory=list)
+    path_forks: list[str] = field(default_factory=list)
     alternatives: list["Result"] = field(default_factory=list)
     events: list[str] = field(default_factory=list)
+    discretisation_error: float | None = None
 
     @property
     def stable(self) -> bool:
@@ -109,6 +150,9 @@ class Result:
             "stability_margin_N_per_rad2": float(self.stability_margin),
             "stable": bool(self.stable),
             "unique": bool(self.unique),
+            "other_equilibria": [other.summary() for other in self.other_equilibria],
+            "path_forks": list(self.path_forks),
+            "discretisation_error_mm": self.discretisation_error,
             "min_bend_radius_mm": self.min_bend_radius,
             "bend_radius_margin_mm": self.bend_radius_margin,
             "single_plane_offset_mm": self.single_plane_offset,

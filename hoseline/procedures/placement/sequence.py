@@ -24,11 +24,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from hoseline.mechanics.newton import RodProperties, end_frame_of, node_positions, solve_equilibrium, total_energy
+from hoseline.mechanics.newton import RodProperties, end_frame_of, solve_equilibrium, total_energy
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rotate_frames, rotation_matrix, rotation_vector
 from hoseline.mechanics.stiffeners import spring_set
-from hoseline.model.hose import Hose
+from hoseline.model.hose import MIN_SEGMENTS, Hose
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.continuation import (
     ContinuationLog,
@@ -41,7 +41,8 @@ from hoseline.procedures.placement.continuation import (
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.stiffening import phase_in_springs
 from hoseline.procedures.placement.stations import build_result
-from hoseline.procedures.placement.symmetry import equivalent_states
+from hoseline.procedures.placement.accuracy import coarse_segments, richardson_error
+from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, symmetric_images
 
 __all__ = ["solve", "PlacementError", "rod_properties"]
 
@@ -135,85 +136,89 @@ def solve(
     progress: Progress | None = None,
     alternatives: bool = False,
     control: StepControl = StepControl(),
+    estimate_error: bool = True,
 ) -> Result:
     """Place the hose of `problem` and return its stable equilibrium.
 
     progress: optional callable(phase, fraction) called after each continuation step.
-    alternatives: also return the other stable equilibria of equal energy (mirror images).
+    alternatives: also return the other stable equilibria found (as Results in result.alternatives).
+    estimate_error: estimate the discretisation error from one coarser solve (result.discretisation_error, mm).
     Raises PlacementError with the phase, fraction and residual when the path cannot be followed.
     """
     started = time.perf_counter()
     props = rod_properties(problem)
     log = ContinuationLog()
-    path = PlacementPath(problem)
-    place_path = path.place
+    sequence = _Sequence(problem, props, control, progress)
+    state = _initial_buckle(sequence.place_props, sequence.path.place, control.first, sequence.path.axis, log)
+    final, state, lock_angle_deg, residual = sequence.finish(log, "place", control.first, state)
 
-    first = control.first
-    place_props = replace(props, springs=None)  # stiffener springs come in once placed (stiffening.py)
-    state = _initial_buckle(place_props, place_path, first, path.axis, log)
-    state = follow("place", place_path, place_props, state, log, start=first, control=control, progress=progress)
-    if props.springs is not None:
-        state = phase_in_springs(props, place_path(1.0), state, log, progress)
-
-    locked_frame = end_frame_of(place_path(1.0), state)
-    lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))
-    twist = math.radians(problem.end_twist_deg)
-
-    def twist_path(t: float) -> Clamps:
-        return path.twisted(locked_frame, problem.end_twist_deg * t)
-
-    state = RodState(state.frames, state.end_force, 0.0)
-    if twist != 0.0:
-        twist_control = replace(  # steps of at most 30 deg at first, 45 deg later
-            control,
-            first=min(control.first, math.radians(30.0) / abs(twist)),
-            largest=min(control.largest, math.radians(45.0) / abs(twist)),
-        )
-        state = follow("twist", twist_path, props, state, log, control=twist_control, progress=progress)
-
-    final = twist_path(1.0)
-    state, report = solve_equilibrium(props, final, state, tolerance=control.tolerance)
-    log.iterations += report.iterations
-    if not report.converged or report.unstable_directions != 0:
-        raise PlacementError(
-            f"placement: the final equilibrium is not a converged stable state (residual {report.residual:.2e}, "
-            f"{report.unstable_directions} unstable directions)"
-        )
-    result = build_result(problem, props, final, state, lock_angle_deg, log, started, report.residual)
-    if result.stability_margin == 0.0:
-        result.unique = False  # neutral: a continuous family of equal shapes
-    if log.equal_energy_choice:
-        result.unique = False
-        result.events.append(
-            "not unique: on the way the hose reached a fork of stable branches of equal energy (a symmetric "
-            "bifurcation) and this result follows one of them; the other branch is an equally likely assembly"
-        )
-    others = _verified_alternatives(props, final, state, equivalent_states(problem, props, final, state), control.tolerance)
-    if others:
-        result.unique = False
-        result.events.append(
-            f"not unique: {len(others)} other stable equilibri{'um' if len(others) == 1 else 'a'} of equal energy "
-            "(the image of this shape under the mounts' symmetry: a mirror image in their common plane, or "
-            "a half turn about their common axis); the hose can lie either way"
-        )
-        if alternatives:
-            result.alternatives = [
-                build_result(problem, props, final, alt, lock_angle_deg, log, started, report.residual) for alt in others
-            ]
+    result = build_result(problem, props, final, state, lock_angle_deg, log, started, residual)
+    others = fork_branches(props, final, state, log.forks, sequence.finish)
+    others += symmetric_images(problem, props, final, state, lock_angle_deg)
+    others = judge_uniqueness(result, props, final, state, others, log.forks)
+    if alternatives:
+        result.alternatives = [
+            build_result(problem, props, other.clamps, other.state, other.lock_angle_deg, log, started, residual)
+            for other in others
+        ]
+    if estimate_error:
+        coarse = replace(problem, hose=replace(problem.hose, segments=coarse_segments(props.segments, MIN_SEGMENTS)))
+        result.discretisation_error = richardson_error(props, rod_properties(coarse), final, state, control.tolerance)
     result.wall_time = time.perf_counter() - started
     return result
 
 
-def _verified_alternatives(props, clamps, state, images, tolerance) -> list[RodState]:
-    """The images that Newton confirms as stable equilibria distinct from `state`."""
-    nodes = node_positions(props, clamps, state)
-    confirmed = []
-    for image in images:
-        image, report = solve_equilibrium(props, clamps, image, tolerance=tolerance, max_iterations=5)
-        distinct = np.max(np.abs(node_positions(props, clamps, image) - nodes)) > 1e-6 * props.length
-        if report.converged and report.unstable_directions == 0 and distinct:
-            confirmed.append(image)
-    return confirmed
+class _Sequence:
+    """The published sequence after the first step, from any phase and fraction: the rest of
+    the place phase (end roll free), the lock, the twist, and the final equilibrium."""
+
+    def __init__(self, problem: Problem, props: RodProperties, control: StepControl, progress: Progress | None):
+        self.problem, self.props, self.control, self.progress = problem, props, control, progress
+        self.path = PlacementPath(problem)
+        self.place_props = replace(props, springs=None)  # stiffener springs come in once placed (stiffening.py)
+        self.locked_frame: np.ndarray | None = None  # of the main run, for forks met while twisting
+        self.lock_angle_deg = 0.0
+
+    def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState):
+        """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`."""
+        problem, props, control = self.problem, self.props, self.control
+        if phase == "place":
+            place_path = self.path.place
+            state = follow("place", place_path, self.place_props, state, log, start=fraction, control=control,
+                           progress=self.progress)
+            if props.springs is not None:
+                state = phase_in_springs(props, place_path(1.0), state, log, self.progress)
+            locked_frame = end_frame_of(place_path(1.0), state)
+            lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))
+            state, fraction = RodState(state.frames, state.end_force, 0.0), 0.0
+            if self.locked_frame is None:
+                self.locked_frame, self.lock_angle_deg = locked_frame, lock_angle_deg
+        elif phase == "twist":
+            locked_frame, lock_angle_deg = self.locked_frame, self.lock_angle_deg
+        else:
+            raise ValueError(f"the placement cannot be resumed in phase {phase!r}")
+
+        def twist_path(t: float) -> Clamps:
+            return self.path.twisted(locked_frame, problem.end_twist_deg * t)
+
+        twist = math.radians(problem.end_twist_deg)
+        if twist != 0.0 and fraction < 1.0:
+            twist_control = replace(  # steps of at most 30 deg at first, 45 deg later
+                control,
+                first=min(control.first, math.radians(30.0) / abs(twist)),
+                largest=min(control.largest, math.radians(45.0) / abs(twist)),
+            )
+            state = follow("twist", twist_path, props, state, log, start=fraction, control=twist_control,
+                           progress=self.progress)
+        final = twist_path(1.0)
+        state, report = solve_equilibrium(props, final, state, tolerance=control.tolerance)
+        log.iterations += report.iterations
+        if not report.converged or report.unstable_directions != 0:
+            raise PlacementError(
+                f"placement: the final equilibrium is not a converged stable state (residual {report.residual:.2e}, "
+                f"{report.unstable_directions} unstable directions)"
+            )
+        return final, state, lock_angle_deg, report.residual
 
 
 def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.ndarray, log: ContinuationLog) -> RodState:
@@ -249,6 +254,7 @@ def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.
         if relaxed is None:
             continue
         best, distinct = relaxed
+        log.record_fork("place", fraction, props, clamps, distinct)
         energies = ", ".join(f"{total_energy(props, clamps, state):.6g}" for state in distinct)
         log.events.append(
             f"place: the straight hose buckles at the first step (fraction {fraction:g}); both sides {label} "
@@ -265,3 +271,17 @@ def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.
 def _rotation_vector_between(frame_a: np.ndarray, frame_b: np.ndarray) -> np.ndarray:
     """World rotation vector R with frame_b = frame_a @ R^T (rad)."""
     return rotation_vector(frame_b.T @ frame_a)
+
+
+def place_only(problem: Problem, control: StepControl = StepControl()) -> tuple[RodProperties, Clamps, RodState, float]:
+    """The published sequence alone, for studies that place many hoses: (rod, final clamps, stable
+    equilibrium, lock angle in degrees), without the Result, the uniqueness checks or the error estimate.
+
+    Raises PlacementError as solve() does.
+    """
+    props = rod_properties(problem)
+    log = ContinuationLog()
+    sequence = _Sequence(problem, props, control, None)
+    state = _initial_buckle(sequence.place_props, sequence.path.place, control.first, sequence.path.axis, log)
+    final, state, lock_angle_deg, _ = sequence.finish(log, "place", control.first, state)
+    return props, final, state, lock_angle_deg

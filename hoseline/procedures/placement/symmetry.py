@@ -64,8 +64,11 @@ def _symmetries(problem: Problem, props: RodProperties) -> list[tuple[np.ndarray
     return [(np.eye(3) - 2.0 * np.outer(normal, normal), True)]
 
 
-def equivalent_states(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState) -> list[RodState]:
-    """Images of `state` under the problem's symmetries that solve the same clamped problem but differ from it."""
+def equivalent_states(
+    problem: Problem, props: RodProperties, clamps: Clamps, state: RodState
+) -> list[tuple[RodState, bool]]:
+    """Images of `state` under the problem's symmetries that solve the same clamped problem but differ
+    from it, each with True for a reflection (mirror image), False for a half turn."""
     images = []
     stiffness = props.stiffness
     round_section = abs(stiffness[0] - stiffness[1]) <= 1e-12 * stiffness[0]
@@ -86,5 +89,5 @@ def equivalent_states(problem: Problem, props: RodProperties, clamps: Clamps, st
         image = RodState(frames, matrix @ state.end_force, 0.0)
         image_nodes = centerline(frames, clamps.start_point, props.segment_length)
         if np.max(np.abs(image_nodes - nodes)) > 1e-6 * props.length:
-            images.append(image)
+            images.append((image, reflection))
     return images

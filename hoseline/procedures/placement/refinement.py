@@ -1,0 +1,50 @@
+"""Placement to a requested accuracy: the segment count chosen from the a-posteriori error estimate."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from hoseline.model.hose import MIN_SEGMENTS
+from hoseline.model.problem import Problem
+from hoseline.procedures.placement.continuation import PlacementError, Progress, StepControl
+from hoseline.procedures.placement.result import Result
+from hoseline.procedures.placement.sequence import solve
+
+SAFETY = 1.2  # the count predicted from the order-2 error law, made this much larger
+FEWEST_SEGMENTS = 10  # no fewer when the estimate asks for fewer: a coarse rod's estimate is itself rough
+MOST_SEGMENTS = 5000
+ROUNDS = 4
+
+
+def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress | None = None,
+                      control: StepControl = StepControl()) -> Result:
+    """Place the hose with a segment count whose estimated largest station error is at most `accuracy` (mm).
+
+    Starts from the problem's segment count; each round predicts the count from the error law
+    (error ~ 1/N^2) and solves again, until the estimate meets the accuracy.  Raises PlacementError
+    when the error cannot be estimated or more than MOST_SEGMENTS would be needed.
+    """
+    if not (math.isfinite(accuracy) and accuracy > 0.0):
+        raise ValueError(f"accuracy {accuracy!r} mm: give a positive number of mm")
+    segments = int(problem.hose.segments)
+    tried: dict[int, Result] = {}
+    for _ in range(ROUNDS):
+        result = solve(replace(problem, hose=replace(problem.hose, segments=segments)), progress=progress,
+                       control=control)
+        tried[segments] = result
+        error = result.discretisation_error
+        if error is None:
+            raise PlacementError(f"the discretisation error at {segments} segments could not be estimated (the solve "
+                                 "with half the segments did not reach a stable equilibrium); give hose.segments instead")
+        if error <= accuracy:
+            result.events.append(f"accuracy: {segments} segments, estimated station error {error:.3g} mm "
+                                 f"<= {accuracy:g} mm asked for")
+            return result
+        needed = math.ceil(segments * math.sqrt(error / accuracy) * SAFETY)
+        if needed > MOST_SEGMENTS:
+            raise PlacementError(f"an accuracy of {accuracy:g} mm needs about {needed} segments (estimated error "
+                                 f"{error:.3g} mm at {segments}), more than {MOST_SEGMENTS}: ask for less accuracy")
+        segments = max(needed, FEWEST_SEGMENTS, MIN_SEGMENTS, segments + 1)
+    raise PlacementError(f"accuracy {accuracy:g} mm not reached in {ROUNDS} rounds (segment counts tried: "
+                         f"{', '.join(map(str, tried))})")
