@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench clean fuzz
 .DELETE_ON_ERROR:
 
 demo: $(VENV)/.installed-test
@@ -27,3 +27,7 @@ $(BIN)/python:
 $(VENV)/.installed-%: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[$*]'
 	touch $@
+
+# The long fuzzing campaign (README, Fuzzing): 10 000 generated inputs through the command line.
+fuzz: $(VENV)/.installed-test
+	$(BIN)/python bench/fuzz.py --count 10000

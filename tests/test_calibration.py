@@ -1,34 +1,71 @@
-"""Calibration against synthetic scans made at a finer discretisation than the fit uses."""
+"""Calibration against synthetic scans of shapes that do not come from the solver: the Kirchhoff
+BVP of reference_shapes.py (SciPy), so an error the model shares with its own finer solutions
+does not cancel out."""
 
 import numpy as np
 import pytest
-from validation_cases import EI, FACTOR, RADIUS, brake_hose, scanned
+from reference_shapes import heavy_thesis_hose
+from validation_cases import EI, FACTOR, ONE_SIDED, RADIUS, brake_hose
 
+from hoseline import solve
 from hoseline.procedures.scans.calibration import ScanCase, _relative_std, calibrate
 from hoseline.procedures.scans.centerline_fit import fit_centerline
+from hoseline.procedures.scans.synthetic_scan import synthetic_scan
 
 
 @pytest.fixture(scope="module")
 def cases():
-    """Scans at 0 and 180 deg of the true hose (80 segments): one-sided, noisy, stray points, a gap."""
+    """Scans at 0 and 180 deg of the true hose (the BVP): one-sided, noisy, stray points, a gap."""
+    shapes = heavy_thesis_hose((0.0, 180.0))
+    s = np.linspace(0.0, 330.6, 331)
     out = []
     for seed, twist in enumerate((0.0, 180.0)):
-        truth, points = scanned(twist, seed=seed)
-        out.append(ScanCase(twist, fit_centerline(points, RADIUS, start_hint=truth.problem.start.point).points))
+        line = shapes[twist].sol(s)[:3].T
+        points = synthetic_scan(s, line, RADIUS, ONE_SIDED, seed=seed)
+        out.append(ScanCase(twist, fit_centerline(points, RADIUS, start_hint=line[0]).points))
     return out
 
 
-def test_recovers_bending_stiffness_and_torsion_factor_within_5_percent(cases):
-    calibration = calibrate(brake_hose(bending=0.7 * EI, factor=12.0, segments=40), cases)
+def test_recovers_bending_stiffness_and_torsion_factor(cases):
+    """An 80-segment model from EI -30 % and factor 12.  Measured: EI -0.11 %, factor -0.39 %
+    (the model's discretisation, about -0.9 % on the factor, partly offset by the one-sided
+    scans' +0.6 %; a 40-segment model gives +0.28 % and -3.2 %)."""
+    calibration = calibrate(brake_hose(bending=0.7 * EI, factor=12.0, segments=80), cases)
     fitted = {p.name: p for p in calibration.parameters}
-    assert fitted["bending_stiffness"].value == pytest.approx(EI, rel=0.05)
-    assert fitted["torsion_factor"].value == pytest.approx(FACTOR, rel=0.05)
-    assert all(p.identifiable and p.std is not None and p.std > 0.0 for p in fitted.values())
+    assert fitted["bending_stiffness"].value == pytest.approx(EI, rel=0.0035)
+    assert fitted["torsion_factor"].value == pytest.approx(FACTOR, rel=0.011)
+    assert all(p.identifiable for p in fitted.values())
     for before, after in zip(calibration.before, calibration.after):
-        assert after.mean < 0.5 < before.mean
+        assert after.mean < 0.13 and before.mean > 2.0  # mm, measured 0.035 / 0.041 after, 2.3 / 5.1 before
     assert calibration.warm_solves > 5 * calibration.cold_solves  # Newton from the last equilibria
     # every model evaluation, the finite-difference Jacobian's included, is one warm or cold solve
     assert calibration.evaluations == calibration.warm_solves + calibration.cold_solves
+
+
+def _noisy_stations(result, rng, count=58, noise=0.05):
+    """`count` stations along a result's centreline polyline, each moved by `noise` mm (standard
+    deviation) in both directions across the hose."""
+    s = np.linspace(0.0, result.s[-1], count + 2)[1:-1]
+    segment = np.minimum((s / result.s[1]).astype(int), len(result.frames) - 1)
+    frames = result.frames[segment]
+    on_line = result.centerline[segment] + (s - result.s[segment])[:, None] * frames[:, 2]
+    return on_line + noise * (rng.normal(size=(count, 1)) * frames[:, 0] + rng.normal(size=(count, 1)) * frames[:, 1])
+
+
+def test_quoted_uncertainty_covers_the_scatter_over_noise_seeds():
+    """Stations with independent noise on the model's own centreline (no model error, so only the
+    noise moves the fit): over 16 seeds, the errors divided by the quoted standard uncertainty
+    have an RMS of 1.  Measured 0.997 (0.955 over 100 seeds); a sigma off by sqrt(2) either way
+    gives 0.70 or 1.41."""
+    results = [solve(brake_hose(segments=24, twist=twist)) for twist in (0.0, 180.0)]
+    truth = {"bending_stiffness": EI, "torsion_factor": FACTOR}
+    z = []
+    for seed in range(16):
+        rng = np.random.default_rng(seed)
+        cases = [ScanCase(r.problem.end_twist_deg, _noisy_stations(r, rng)) for r in results]
+        calibration = calibrate(brake_hose(bending=0.7 * EI, factor=12.0, segments=24), cases)
+        z += [(p.value - truth[p.name]) / p.std for p in calibration.parameters]
+    assert 0.8 < np.sqrt(np.mean(np.square(z))) < 1.25
 
 
 def test_weightless_hose_refuses_bending_stiffness_and_still_fits_the_torsion_factor(cases):

@@ -12,6 +12,9 @@ from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.mechanics.rotations import frame_from_tangent
 
 TABLE = {1.0: (0.30172, 0.05643), 2.0: (0.49346, 0.16064), 5.0: (0.71379, 0.38763), 10.0: (0.81061, 0.55500)}
+# |discrete rod at 100 segments - table| / L, deflection and shortening, as measured
+MEASURED = {1.0: (1.06e-5, 4.8e-6), 2.0: (3.2e-6, 1.3e-6), 5.0: (1.7e-6, 3.0e-5), 10.0: (4.0e-6, 5.5e-5)}
+TABLE_ROUNDING = 5e-6  # the table's last digit, in L
 
 
 def cantilever_tip(load_parameter, segments, length=1000.0, stiffness=2.0e6):
@@ -34,8 +37,10 @@ def test_cantilever_matches_bisshopp_drucker(load_parameter):
     length = 1000.0
     deflection, shortening = cantilever_tip(load_parameter, 100, length)
     expected_deflection, expected_shortening = TABLE[load_parameter]
-    assert abs(deflection / length - expected_deflection) < 0.002
-    assert abs(shortening / length - expected_shortening) < 0.002
+    # 3x what was measured, or 3x the table's rounding where the rod is closer than that
+    deflection_tolerance, shortening_tolerance = (3.0 * max(m, TABLE_ROUNDING) for m in MEASURED[load_parameter])
+    assert abs(deflection / length - expected_deflection) < deflection_tolerance
+    assert abs(shortening / length - expected_shortening) < shortening_tolerance
 
 
 def test_cantilever_converges_at_second_order():

@@ -16,7 +16,7 @@ def brute_force_nearest(nodes, vertices, faces):
     return _brute_force(np.asarray(nodes, dtype=float), np.asarray(vertices, dtype=float)[np.asarray(faces)])
 
 
-@njit(cache=True)
+@njit  # no disk cache: Numba's would keep an old segment_triangle_distance (hoseline/compilation.py)
 def _brute_force(nodes, triangles):
     best = math.inf
     for i in range(nodes.shape[0] - 1):

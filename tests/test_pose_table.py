@@ -93,3 +93,23 @@ def test_a_table_that_is_not_utf8_is_refused_with_the_line(tmp_path):
     path.write_bytes((HEADER + "0, 0, 0, 0, 1, 0, 0, 0\n# r\xe9f\xe9rence\n").encode("latin-1"))
     with pytest.raises(PoseTableError, match=r"line 3: not UTF-8 text"):
         read_pose_table(path, "knuckle")
+
+
+@pytest.mark.parametrize(
+    "row, fragment",
+    [
+        ("0, 0, 100001, 0, 1, 0, 0, 0", "line 2, column y: 100001 is outside +-100000 mm"),
+        ("0, 0, 0, -1e300, 1, 0, 0, 0", "line 2, column z: -1e+300 is outside +-100000 mm"),
+        ("2e9, 0, 0, 0, 1, 0, 0, 0", "line 2, column travel: 2e+09 is outside +-1e+09"),
+    ],
+    ids=["translation just out", "translation huge", "travel huge"],
+)
+def test_values_out_of_range_are_named_by_line_and_column(tmp_path, row, fragment):
+    with pytest.raises(PoseTableError) as error:
+        read_pose_table(write(tmp_path, HEADER + row + "\n"), "knuckle")
+    assert fragment in str(error.value)
+
+
+def test_translations_at_the_bound_are_read(tmp_path):
+    motion = read_pose_table(write(tmp_path, HEADER + "0, 100000, -100000, 0, 1, 0, 0, 0\n"), "knuckle")
+    np.testing.assert_array_equal(motion.poses[0].position, [1e5, -1e5, 0.0])

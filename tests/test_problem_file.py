@@ -97,3 +97,60 @@ def test_missing_file_raises_file_not_found(tmp_path):
     with pytest.raises(FileNotFoundError):
         load_problem(tmp_path / "nope.toml")
 
+
+
+@pytest.mark.parametrize(
+    "old, new, fragments",
+    [
+        ("length = 330.6", "length = 1e300", ["hose.length = 1e+300", "between 1 and 100000 mm"]),
+        ("length = 330.6", "length = 0.5", ["hose.length = 0.5", "between 1 and 100000 mm"]),
+        ("[-173.064, -7.0, -11.25]", "[1e15, -7.0, -11.25]", ["end.point = [1000000000000000.0, -7.0, -11.25]",
+                                                              "within +-100000 mm"]),
+        ("bending_stiffness = 149563.0", "bending_stiffness = 1e13", ["hose.bending_stiffness = 10000000000000.0", "1e+12 N*mm^2"]),
+        ("bending_stiffness = 149563.0", "youngs_modulus = 1e-3",
+         ["hose.torsional_stiffness = 2454930.0 gives 7.21e+06 times the isotropic GJ"]),
+        ("outer_diameter = 10.1", "outer_diameter = 100.0", ["hose.outer_diameter = 100.0 mm is more than 1/4 of hose.length"]),
+        ("outer_diameter = 10.1", "outer_diameter = 0.01", ["hose.outer_diameter = 0.01", "between 0.1 and 2000 mm"]),
+        ("torsional_stiffness = 2454930.0", "torsional_stiffness = 1e11", ["1e+06 times the isotropic GJ", "0.001-1000"]),
+        ("torsional_stiffness = 2454930.0", "torsion_factor = 1e4", ["hose.torsion_factor = 10000.0", "between 0.001 and 1000"]),
+        ("segments = 10", "segments = 100000", ["hose.segments = 100000", "at most 10000"]),
+        ("min_bend_radius = 50.0", "min_bend_radius = 1e9", ["hose.min_bend_radius = 1000000000.0", "at most 100000 mm"]),
+        ("min_bend_radius = 50.0", "mass_per_length = 5000.0", ["hose.mass_per_length = 5000.0", "at most 1000 kg/m"]),
+        ("twist = 180.0", "twist = 1e9", ["end.twist = 1000000000.0", "within +-3600 degrees"]),
+        ("gravity = [0.0, 0.0, 0.0]", "gravity = [0.0, 0.0, -9810.0]", ["environment.gravity", "at most 100 m/s^2"]),
+    ],
+    ids=["length huge", "length tiny", "coordinate 1e15", "EI huge", "GJ lopsided from E", "diameter vs length",
+         "diameter tiny", "GJ lopsided", "torsion factor", "segments", "bend radius", "mass", "twist", "gravity in mm/s^2"],
+)
+def test_values_outside_sensible_ranges_name_the_field_and_range(tmp_path, old, new, fragments):
+    path = write(tmp_path / "bad.toml", bad_toml(old, new))
+    with pytest.raises(ProblemFileError) as caught:
+        load_problem(path)
+    for fragment in fragments:
+        assert fragment in str(caught.value)
+
+
+def test_ranges_admit_their_bounds(thesis_dict):
+    """The bounds themselves are sensible inputs: a 1 mm-thin, 90 m hose and a stiff, heavy one load."""
+    data = thesis_dict
+    data["hose"].update(length=9e4, outer_diameter=0.1, bending_stiffness=1e-3, torsional_stiffness=1e-3 / 1.5 * 1e3,
+                        mass_per_length=1e3, segments=10_000, min_bend_radius=1e5)
+    data["end"].update(point=[1e5, -1e5, -11.25], twist=-3600.0)
+    data["start"]["point"] = [1e5 - 10.0, -1e5, -11.25]
+    data["environment"]["gravity"] = [0.0, 0.0, -100.0]
+    problem = problem_from_dict(data)
+    assert problem.hose.segments == 10_000 and problem.end_twist_deg == -3600.0
+
+
+def test_a_direction_with_huge_components_is_normalised_not_zeroed(thesis_dict):
+    thesis_dict["end"]["direction"] = [1e308, 1e308, 0.0]
+    direction = problem_from_dict(thesis_dict).end.direction
+    np.testing.assert_allclose(direction, [math.sqrt(0.5), math.sqrt(0.5), 0.0])
+
+
+def test_a_torsional_stiffness_computed_below_the_range_is_refused(thesis_dict):
+    """EI = 1 N*mm^2 and torsion_factor 1e-3 are each in range; the GJ they give (6.7e-4 N*mm^2) is not."""
+    del thesis_dict["hose"]["torsional_stiffness"]
+    thesis_dict["hose"].update(bending_stiffness=1.0, torsion_factor=1e-3)
+    with pytest.raises(ProblemFileError, match=r"hose.torsion_factor = 0.001 gives GJ = 0.000667 N\*mm\^2, outside"):
+        problem_from_dict(thesis_dict)

@@ -5,6 +5,7 @@ import struct
 import numpy as np
 import pytest
 
+from hoseline.io import scans
 from hoseline.io.scans import ScanFileError, read_scan, write_ply
 
 POINTS = np.random.default_rng(1).normal(size=(30, 3)) * 50.0
@@ -66,3 +67,43 @@ def test_bad_scans_are_refused_with_the_place_and_the_fix(tmp_path, name, conten
         read_scan(tmp_path / name)
     for fragment in fragments:
         assert fragment in str(error.value)
+
+
+def _no_line_by_line(*args):
+    raise AssertionError("read line by line: the fast reader refused a well-formed file")
+
+
+@pytest.mark.parametrize("name, content, expected", [
+    ("a.csv", "\ufeffx;y;z\r\n# units: mm\r\n1;2;3\r\n\r\n4;5;6;7 # with a fourth column\r\n", [[1, 2, 3], [4, 5, 6]]),
+    ("b.xyz", "x y z\nmm mm mm\n1\t2\t3\n  -4e1  5.5   6\n", [[1, 2, 3], [-40, 5.5, 6]]),
+    ("c.txt", "1, 2, 3\n4,5 ,6\n", [[1, 2, 3], [4, 5, 6]]),
+])
+def test_well_formed_text_is_read_without_the_line_by_line_reader(tmp_path, monkeypatch, name, content, expected):
+    monkeypatch.setattr(scans, "_read_text_lines", _no_line_by_line)
+    (tmp_path / name).write_bytes(content.encode())
+    np.testing.assert_array_equal(read_scan(tmp_path / name, min_points=1), expected)
+
+
+def test_text_is_read_exactly_and_mixed_separators_line_by_line(tmp_path, monkeypatch):
+    (tmp_path / "mixed.xyz").write_text("1 2 3\n4,5;6\n" * 15)
+    np.testing.assert_array_equal(read_scan(tmp_path / "mixed.xyz"), [[1, 2, 3], [4, 5, 6]] * 15)
+    monkeypatch.setattr(scans, "_read_text_lines", _no_line_by_line)
+    (tmp_path / "exact.xyz").write_text("".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in POINTS.tolist()))
+    np.testing.assert_array_equal(read_scan(tmp_path / "exact.xyz"), POINTS)  # every digit, as Python reads it
+
+
+def test_large_binary_and_ascii_ply_with_faces_after_the_vertices(tmp_path, monkeypatch):
+    points = np.random.default_rng(2).normal(size=(100_000, 3)).astype(np.float32) * 100.0
+    header = ("ply\nformat {}\ncomment scanner export\nelement vertex 100000\nproperty float x\nproperty float y\n"
+              "property float z\nproperty uchar intensity\nelement face 2\nproperty list uchar int vertex_indices\n"
+              "end_header\n")
+    record = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("intensity", "u1")])
+    table = np.zeros(100_000, dtype=record)
+    table["x"], table["y"], table["z"] = points.T
+    faces = bytes([3]) + np.array([0, 1, 2], "<i4").tobytes()
+    (tmp_path / "b.ply").write_bytes(header.format("binary_little_endian 1.0").encode() + table.tobytes() + faces * 2)
+    np.testing.assert_array_equal(read_scan(tmp_path / "b.ply"), points)
+    monkeypatch.setattr(scans, "_read_ply_ascii_lines", _no_line_by_line)
+    body = "".join(f"{x!r} {y!r} {z!r} 7\r\n" for x, y, z in points.tolist()) + "3 0 1 2\r\n" * 2
+    (tmp_path / "a.ply").write_bytes(header.format("ascii 1.0").replace("\n", "\r\n").encode() + body.encode())
+    np.testing.assert_array_equal(read_scan(tmp_path / "a.ply"), points)

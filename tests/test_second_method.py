@@ -49,7 +49,7 @@ def test_discrete_rod_converges_to_the_elastica_solution():
     for result in (coarse, fine):
         exact = reference.sol(result.s)[:2].T
         errors.append(np.max(np.linalg.norm(result.centerline[:, :2] - exact, axis=1)))
-    assert errors[1] < 0.1  # mm, at 100 segments
-    assert 3.5 < errors[0] / errors[1] < 4.5  # second order, against an independent solution
-    # the end force from the multiplier matches the elastica's end force
-    assert np.allclose(fine.end_force[:2], reference.p, rtol=2e-3, atol=1e-3)
+    assert errors[1] < 0.09  # mm, at 100 segments: measured 0.0296 (0.118 at 50)
+    assert 3.9 < errors[0] / errors[1] < 4.1  # second order, against an independent solution: measured 3.98
+    # the end force from the multiplier matches the elastica's end force: measured 1.05e-3 relative
+    assert np.linalg.norm(fine.end_force[:2] - reference.p) < 3e-3 * np.linalg.norm(reference.p)

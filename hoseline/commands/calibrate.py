@@ -12,7 +12,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from hoseline.commands.common import BAD_INPUT, OUT_HELP, QUIET_HELP, errors_to_exit_codes, fail
+from hoseline.commands.common import BAD_INPUT, OUT_HELP, QUIET_HELP, compile_solver, errors_to_exit_codes, fail
 from hoseline.commands.scan_inputs import (SCANS_HELP, TWIST_HELP, deviation_table, fitted, load_problem_file,
                                            load_scan, placed, scan_twists)
 from hoseline.procedures.scans.parameters import PARAMETERS
@@ -42,6 +42,7 @@ def calibrate_command(
         raise fail(f"--fit {fit!r}: {reason}; choose from {', '.join(PARAMETERS)}", BAD_INPUT)
     clouds = [load_scan(path) for path in scans]
     with errors_to_exit_codes(out):
+        compile_solver(quiet)
         fits = [fitted(cloud, problem, path) for cloud, path in zip(clouds, scans)]
         calibration = calibrate(problem, [ScanCase(angle, f.points) for angle, f in zip(twists, fits)], names)
         calibrated = replace(problem, hose=calibration.hose)

@@ -7,6 +7,7 @@ are imported inside the functions that need them, so that `hoseline --help` star
 
 from __future__ import annotations
 
+import errno
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -41,6 +42,30 @@ def read_input(reader: Callable, path: Path, what: str, errors: tuple[type[Excep
         raise fail(f"cannot read {what} {path}: {exc.strerror or exc}", BAD_INPUT) from None
 
 
+FIRST_RUN = "first run: compiling the solver, once per installation"
+NO_CACHE = "compiling the solver (no writable cache folder: every run compiles; set NUMBA_CACHE_DIR to keep it)"
+
+
+def compile_solver(quiet: bool, clearance: bool = False, stiffeners: bool = False) -> None:
+    """Compile the solver's kernels (with `clearance` those of clearance queries, with `stiffeners`
+    those of stiffener springs) if this installation has not yet, saying so meanwhile: a spinner
+    on a terminal, a line in a log, nothing when quiet.  See hoseline/procedures/compile_kernels.py."""
+    from hoseline.compilation import persistent
+    from hoseline.procedures.compile_kernels import compile_kernels, kernels_compiled
+
+    if kernels_compiled(clearance, stiffeners):
+        return
+    console = Console(stderr=True)
+    message = FIRST_RUN if persistent() else NO_CACHE
+    if quiet or not console.is_terminal:
+        if not quiet:
+            console.print(message)
+        compile_kernels(clearance, stiffeners)
+        return
+    with console.status(message):
+        compile_kernels(clearance, stiffeners)
+
+
 @contextmanager
 def progress_bar(quiet: bool) -> Iterator[Callable[[str, float], None] | None]:
     """A progress(phase, fraction) callback drawing one Rich bar per phase, or None when quiet."""
@@ -71,7 +96,11 @@ def errors_to_exit_codes(out_dir: Path) -> Iterator[None]:
     from hoseline.io.exports import ExportError
     from hoseline.procedures.placement.continuation import PlacementError
 
-    existing = next(path for path in (out_dir, *out_dir.parents) if path.exists())
+    try:
+        existing = next(path for path in (out_dir, *out_dir.parents) if path.exists())
+    except OSError as exc:  # e.g. a name longer than the file system allows
+        fix = "a shorter" if exc.errno == errno.ENAMETOOLONG else "another"
+        raise fail(f"cannot write to {out_dir}: {exc.strerror or exc}; choose {fix} -o", BAD_INPUT) from None
     if not existing.is_dir():
         raise fail(f"cannot write to {out_dir}: {existing} is a file, not a directory; choose another -o", BAD_INPUT)
     try:
@@ -81,4 +110,13 @@ def errors_to_exit_codes(out_dir: Path) -> Iterator[None]:
     except ExportError as exc:
         raise fail(f"export failed, nothing written: {exc}", EXPORT_FAILED) from None
     except OSError as exc:
-        raise fail(f"cannot write to {out_dir}: {exc}", BAD_INPUT) from None
+        reason = exc.strerror or exc
+        if exc.filename and not Path(exc.filename).absolute().is_relative_to(_staging_anchor(out_dir)):
+            raise fail(f"cannot use {exc.filename}: {reason}", BAD_INPUT) from None  # not the output's fault
+        fix = "a shorter" if exc.errno == errno.ENAMETOOLONG else "another"
+        raise fail(f"cannot write to {out_dir}: {reason}; choose {fix} -o", BAD_INPUT) from None
+
+
+def _staging_anchor(out_dir: Path) -> Path:
+    """The nearest existing parent of `out_dir`, where its files are staged (io/atomic.py)."""
+    return next(path for path in out_dir.absolute().parents if path.exists())

@@ -12,7 +12,8 @@ from pathlib import Path
 import typer
 from rich.console import Console
 
-from hoseline.commands.common import BAD_INPUT, CHECK_FAILED, OUT_HELP, QUIET_HELP, errors_to_exit_codes, fail
+from hoseline.commands.common import (BAD_INPUT, CHECK_FAILED, OUT_HELP, QUIET_HELP, compile_solver,
+                                      errors_to_exit_codes, fail)
 from hoseline.commands.scan_inputs import (SCANS_HELP, TWIST_HELP, deviation_table, fitted, load_problem_file,
                                            load_scan, placed, scan_twists)
 
@@ -41,6 +42,7 @@ def compare_command(
     clouds = [load_scan(path) for path in scans]
     references = None if reference_points is None else load_scan(reference_points, "reference points", min_points=1)
     with errors_to_exit_codes(out):
+        compile_solver(quiet)
         fits = [fitted(cloud, problem, path) for cloud, path in zip(clouds, scans)]
         results = placed(problem, twists)
         comparisons = []

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 from rich.console import Console
 
-from hoseline.commands.common import OUT_HELP, QUIET_HELP, errors_to_exit_codes, progress_bar
+from hoseline.commands.common import OUT_HELP, QUIET_HELP, compile_solver, errors_to_exit_codes, progress_bar
 from hoseline.commands.solve import EXPORT_HELP, export_formats, print_exports
 
 
@@ -22,6 +22,7 @@ def demo_command(
 
     formats = export_formats(export)
     with errors_to_exit_codes(out):
+        compile_solver(quiet)
         with progress_bar(quiet) as progress:
             labels, results, exported = thesis_hose.run_demo(out, progress=progress, formats=formats)
     if not quiet:

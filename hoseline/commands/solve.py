@@ -8,7 +8,8 @@ from pathlib import Path
 import typer
 from rich.console import Console
 
-from hoseline.commands.common import BAD_INPUT, OUT_HELP, QUIET_HELP, errors_to_exit_codes, fail, progress_bar, read_input
+from hoseline.commands.common import (BAD_INPUT, OUT_HELP, QUIET_HELP, compile_solver, errors_to_exit_codes, fail,
+                                      progress_bar, read_input)
 from hoseline.io.export_names import FILE_NAMES, parse_formats
 
 EXPORT_HELP = (
@@ -39,6 +40,7 @@ def solve_command(
     wanted = None if accuracy is None else accuracy_mm(accuracy)
     problem = read_input(load_problem, problem_file, "problem file", (ProblemFileError,))
     with errors_to_exit_codes(out):
+        compile_solver(quiet)
         with progress_bar(quiet) as progress:
             if wanted is None:
                 result = solve(problem, progress=progress)

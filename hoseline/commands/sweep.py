@@ -12,7 +12,8 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from hoseline.commands.common import BAD_INPUT, OUT_HELP, QUIET_HELP, errors_to_exit_codes, fail, progress_bar, read_input
+from hoseline.commands.common import (BAD_INPUT, OUT_HELP, QUIET_HELP, compile_solver, errors_to_exit_codes, fail,
+                                      progress_bar, read_input)
 
 
 def sweep_command(
@@ -37,6 +38,7 @@ def sweep_command(
         text = sweep_file.read_text(encoding="utf-8")
 
     with errors_to_exit_codes(out):
+        compile_solver(quiet, clearance=True)
         with progress_bar(quiet) as progress:
             result = run_sweep(sweep, progress=progress)
         write_sweep_report(result, out, text)

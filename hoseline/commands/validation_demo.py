@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 from rich.console import Console
 
-from hoseline.commands.common import OUT_HELP, QUIET_HELP, errors_to_exit_codes
+from hoseline.commands.common import OUT_HELP, QUIET_HELP, compile_solver, errors_to_exit_codes
 from hoseline.commands.scan_inputs import deviation_table
 
 
@@ -19,6 +19,7 @@ def validation_demo_command(
     from hoseline.demos.validation import run_validation_demo
 
     with errors_to_exit_codes(out):
+        compile_solver(quiet, stiffeners=True)
         outcome = run_validation_demo(out)
     if not quiet:
         Console().print(deviation_table(outcome.comparisons))

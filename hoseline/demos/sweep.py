@@ -3,7 +3,9 @@
 The start fitting (B) is on the chassis, fixed.  The end fitting (D) is on the knuckle,
 which steers 25 degrees each way about an inclined kingpin axis and then moves 40 mm up
 (jounce) and down (rebound).  A cylinder of 25 mm radius stands for the strut, fixed to
-the chassis.  `hoseline sweep --demo -o out/sweep` runs it.
+the chassis; it is made here rather than read from a file, so the report writes it beside
+itself as obstacle_strut.stl (to check the clearance against).  `hoseline sweep --demo -o
+out/sweep` runs it.
 """
 
 from __future__ import annotations
@@ -29,10 +31,10 @@ ASSUMED_MIN_BEND_RADIUS = 35.0  # mm, not from the thesis: a typical catalogue v
 
 
 def strut_obstacle(sections: int = 64) -> Obstacle:
-    """The strut: a closed cylinder mesh (trimesh), `sections` facets round."""
+    """The strut: a closed cylinder mesh (trimesh), `sections` facets round; no source file."""
     mesh = trimesh.creation.cylinder(radius=STRUT_RADIUS, height=STRUT_HEIGHT, sections=sections)
     mesh.apply_translation(STRUT_CENTRE)
-    return Obstacle("strut", np.asarray(mesh.vertices), np.asarray(mesh.faces), source="built-in cylinder")
+    return Obstacle("strut", np.asarray(mesh.vertices), np.asarray(mesh.faces))
 
 
 def demo_sweep(steps_per_degree: float = 0.5, segments: int = GOODYEAR_5052.segments) -> SweepProblem:

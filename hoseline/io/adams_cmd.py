@@ -12,7 +12,11 @@ What the thesis' generator wrote (Thomas 2004, chapter II and appendix D), at th
   inboard one, undeformed length = segment length) with the section properties of
   BeamSection; the beams are pre-bent and pre-twisted: their markers carry the solved frames;
 - fixed joints from the first part (at the start tip) and the last part (at the end tip) to
-  markers on ground; gravity when the problem has it; mass properties when the hose has mass.
+  markers on ground; gravity when the problem has it; mass properties when the hose has mass;
+- a joint per clip (CLIP_JOINTS: fixed, revolute for a rotating clip, spherical for a ball
+  clip) from the base marker of the part that starts at the clip station to a ground marker
+  clip_<n> there, with the part's axes (so the joint is assembled at the solved shape; the
+  revolute axis is then the part's z, within half a joint angle of the clip direction).
 
 Units mm, kg, N, s, degrees.  The commands and parameter names follow the ADAMS/View command
 language as ADAMS/View itself writes .cmd files; the file was checked against that
@@ -126,6 +130,9 @@ def _about_x(angle: float) -> np.ndarray:
 # --- writing ---
 
 
+CLIP_JOINTS = {"fixed": "fixed", "rotating": "revolute", "ball": "spherical"}  # clip type -> ADAMS joint
+
+
 def adams_cmd_text(result: Result, section: BeamSection | None = None) -> str:
     """The ADAMS/View command file of the solved hose (see the module docstring).
 
@@ -228,6 +235,7 @@ def adams_cmd_text(result: Result, section: BeamSection | None = None) -> str:
             i_marker_name=marker,
             j_marker_name=f"{model}.ground.{ground}",
         )
+    _clip_joints(out, ids, model, parts, result, frames)
     if np.any(problem.gravity != 0.0):
         gravity = problem.gravity * 1e3  # m/s^2 -> mm/s^2
         out.command(
@@ -238,6 +246,25 @@ def adams_cmd_text(result: Result, section: BeamSection | None = None) -> str:
             z_component_gravity=_number(gravity[2]),
         )
     return out.text()
+
+
+def _clip_joints(out: "_Commands", ids: "_Ids", model: str, parts: list[str], result: Result, frames: np.ndarray) -> None:
+    """One joint per clip, from the base of the part starting at the clip station to a ground marker there."""
+    if not result.clips:
+        return
+    out.comment("the clips: one joint each at its station")
+    h = result.problem.hose.segment_length
+    for number, clip in enumerate(result.clips, start=1):
+        node = round(clip.arc_length / h)
+        out.command("defaults coordinate_system", default_coordinate_system=f"{model}.ground")
+        _place(out, ids, "marker", f"{model}.ground.clip_{number}", result.centerline[node], frames[node])
+        out.command(
+            f"constraint create joint {CLIP_JOINTS[clip.kind]}",
+            joint_name=f"{model}.clip_{number}",
+            adams_id=ids.next("joint"),
+            i_marker_name=f"{parts[node]}.base",
+            j_marker_name=f"{model}.ground.clip_{number}",
+        )
 
 
 def _place(out: "_Commands", ids: "_Ids", kind: str, name: str, location, axes: np.ndarray) -> None:

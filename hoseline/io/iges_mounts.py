@@ -22,6 +22,7 @@ from OCP.IFSelect import IFSelect_ReturnStatus
 from OCP.IGESControl import IGESControl_Reader
 
 from hoseline.io.occt import quiet
+from hoseline.model.limits import COORDINATE_MM, coordinate_within
 from hoseline.model.mounts import Mount
 
 POINT_ENTITY = 116
@@ -83,6 +84,22 @@ def mounts_from_iges(
     return _mount(path, points, start), _mount(path, points, end)
 
 
+def clip_points_from_iges(path: str | Path, clips: list[FittingLabels | str]) -> list[tuple[np.ndarray, np.ndarray | None]]:
+    """Point (mm) and direction (unit, from the start side to the end side) of clips from the named
+    points of an IGES file: FittingLabels for a clip that holds the direction (its tip and one more
+    point on its axis, as for the fittings), a single label for a ball clip (direction None).
+    Raises IgesError as mounts_from_iges does."""
+    points = read_named_points(path)
+    out: list[tuple[np.ndarray, np.ndarray | None]] = []
+    for labels in clips:
+        if isinstance(labels, str):
+            out.append((_point(path, points, labels), None))
+        else:
+            mount = _mount(path, points, labels)
+            out.append((mount.point, mount.direction))
+    return out
+
+
 def read_named_points(path: str | Path) -> dict[str, list[np.ndarray]]:
     """Every labelled point (entity 116) of an IGES file: label -> coordinates in mm (one entry per point).
 
@@ -124,6 +141,12 @@ def _label(entity) -> str:
 def _mount(path, points: dict[str, list[np.ndarray]], labels: FittingLabels) -> Mount:
     """The mount of one fitting; refuses missing, duplicated and coincident points."""
     tip, axis = (_point(path, points, label) for label in (labels.tip, labels.axis))
+    for label, point in ((labels.tip, tip), (labels.axis, axis)):
+        if not all(coordinate_within(v) for v in point):
+            raise IgesError(
+                f"{path}: point {label} at {_coordinates(point)} mm lies outside +-{COORDINATE_MM:g} mm (100 m): "
+                "check the coordinates and the unit in the global section"
+            )
     distance = float(np.linalg.norm(axis - tip))
     if distance < COINCIDENT_MM:
         raise IgesError(

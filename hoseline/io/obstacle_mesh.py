@@ -2,7 +2,7 @@
 
 Meshes are read with trimesh; STEP files are read and tessellated by OpenCASCADE (the OCP
 bindings) to within STEP_DEFLECTION.  Coordinates are taken as mm, in the same axes as the
-problem file.
+problem file, and must lie within +-1e5 mm (model/limits.py).
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import numpy as np
 import trimesh
 
 from hoseline.io.atomic import write_bytes
+from hoseline.model import limits
 
 STEP_SUFFIXES = (".step", ".stp")
 STEP_DEFLECTION = 0.1  # mm, largest distance between a STEP surface and its triangles
@@ -42,9 +43,21 @@ def read_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     faces = np.asarray(getattr(mesh, "faces", np.empty((0, 3))), dtype=np.int64)
     if faces.ndim != 2 or faces.shape[0] == 0:
         raise ObstacleFileError(f"{path}: holds no triangles; export the part as a surface mesh (STL, OBJ, PLY)")
-    vertices = np.asarray(mesh.vertices, dtype=float)
+    return _checked(path, np.asarray(mesh.vertices, dtype=float), faces)
+
+
+def _checked(path: Path, vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh, if its vertices are finite and within the coordinate range and its triangles index them."""
     if not np.all(np.isfinite(vertices)):
         raise ObstacleFileError(f"{path}: has vertices that are not finite numbers")
+    largest = float(np.max(np.abs(vertices), initial=0.0))
+    if largest > limits.COORDINATE_MM:
+        raise ObstacleFileError(
+            f"{path}: a vertex coordinate is {largest:g} mm, outside +-{limits.COORDINATE_MM:g} mm (100 m): "
+            "export the mesh in mm"
+        )
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        raise ObstacleFileError(f"{path}: triangles refer to vertices the file does not have: export the mesh again")
     return vertices, faces
 
 
@@ -87,7 +100,7 @@ def _read_step(path: Path) -> tuple[np.ndarray, np.ndarray]:
         explorer.Next()
     if not faces:
         raise ObstacleFileError(f"{path}: the STEP file has no faces to tessellate (only curves or points?)")
-    return np.array(vertices, dtype=float), np.array(faces, dtype=np.int64)
+    return _checked(path, np.array(vertices, dtype=float), np.array(faces, dtype=np.int64))
 
 
 def write_stl(path: str | Path, vertices: np.ndarray, faces: np.ndarray) -> Path:

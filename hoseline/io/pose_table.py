@@ -14,7 +14,8 @@ Format: one header line, then one row per pose, in the order of the sweep::
 - Poses are relative to the design position, where the problem file gives the mounts:
   the identity (0, 0, 0, 1, 0, 0, 0) is the design position.
 - Empty lines and lines starting with # are skipped.  Quaternions must have unit norm
-  (within 1e-3; they are then normalised).
+  (within 1e-3; they are then normalised).  Translations lie within +-1e5 mm (100 m) and the
+  travel within +-1e9 (model/limits.py).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hoseline.model import limits
 from hoseline.model.motion import BodyMotion, Pose, Stage, matrix_quaternion, quaternion_matrix
 
 POSE_COLUMNS = ("x", "y", "z", "qw", "qx", "qy", "qz")
@@ -61,6 +63,9 @@ def read_pose_table(path: str | Path, body: str) -> BodyMotion:
         if len(row) != len(names):
             raise PoseTableError(f"{path} line {number}: {len(row)} values, but the header has {len(names)} columns")
         values = [_number(path, number, name, cell) for name, cell in zip(names, row)]
+        _in_range(path, number, names[0], values[0], limits.TRAVEL, "in its unit")
+        for c in ("x", "y", "z"):
+            _in_range(path, number, c, values[columns[c]], limits.COORDINATE_MM, "mm (100 m); give translations in mm")
         quaternion = np.array([values[columns[c]] for c in ("qw", "qx", "qy", "qz")])
         norm = float(np.linalg.norm(quaternion))
         if abs(norm - 1.0) > NORM_TOLERANCE:
@@ -113,6 +118,12 @@ def _number(path: Path, line: int, column: str, cell: str) -> float:
     if not math.isfinite(value):
         raise PoseTableError(f"{path} line {line}, column {column}: {cell.strip()} is not a finite number")
     return value
+
+
+def _in_range(path: Path, line: int, column: str, value: float, largest: float, unit: str) -> None:
+    """Refuse a value beyond +-largest, naming the line and column."""
+    if abs(value) > largest:
+        raise PoseTableError(f"{path} line {line}, column {column}: {value:g} is outside +-{largest:g} {unit}")
 
 
 def pose_table_text(travel_header: str, travel, poses) -> str:

@@ -41,6 +41,19 @@ torsional_stiffness / torsion_factor; without either, torsion_factor = 1, the
 isotropic GJ = EI / (1 + poisson_ratio) with poisson_ratio 0.5 unless given.
 Real hoses are often much stiffer in torsion (the thesis calibrates 25x).
 bending_stiffness_2 (N*mm^2, optional) is EI about the second section axis.
+
+Clips (intermediate supports, model/clips.py), one [[clips]] table each, in order of arc length::
+
+    [[clips]]
+    type = "fixed"                   # fixed, rotating or ball
+    arc_length = 150.0               # mm from the start fitting, on a station of the hose
+    point = [-60.0, 120.0, 10.0]     # mm
+    direction = [-1.0, 0.3, 0.0]     # the hose's tangent through the clip (not for a ball clip)
+    name = "bracket"                 # optional
+
+With [mounts], a clip may name IGES points instead of point and direction, as the fittings do:
+tip = "E" with behind = "F" (the hose passes along F->E) or ahead = "F" (along E->F); a ball
+clip names its tip only.
 """
 
 from __future__ import annotations
@@ -65,8 +78,10 @@ from hoseline.model.hose import (
     bending_stiffness_from_modulus,
     isotropic_torsional_stiffness,
 )
+from hoseline.model import limits
+from hoseline.model.clips import Clip
 from hoseline.model.mounts import Mount
-from hoseline.model.problem import Problem
+from hoseline.model.problem import Problem, reaches
 
 
 class ProblemFileError(ValueError):
@@ -91,6 +106,10 @@ _UNITS = {
     "tip": "label of the fitting tip point",
     "behind": "label of a point on the fitting axis behind the tip",
     "ahead": "label of a point on the fitting axis ahead of the tip",
+    "type": "fixed, rotating or ball",
+    "arc_length": "mm from the start fitting",
+    "name": "free text",
+    "clips.direction": "the hose's tangent through the clip",
 }
 
 
@@ -106,18 +125,33 @@ def _positive(unit: str):
     return AfterValidator(check)
 
 
-def _not_negative(unit: str):
+def _in_range(bounds: tuple[float, float], unit: str, what: str):
+    """A positive value within `bounds` (in `unit`); `what` says where the range comes from."""
+
     def check(value: float) -> float:
-        if not (math.isfinite(value) and value >= 0.0):
-            raise ValueError(f"must be zero or positive ({unit})")
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"must be positive ({unit})")
+        if not limits.within(value, bounds):
+            raise ValueError(f"must lie between {bounds[0]:g} and {bounds[1]:g} {unit} ({what}); check the unit")
         return value
 
     return AfterValidator(check)
 
 
-def _finite(value: float) -> float:
-    if not math.isfinite(value):
-        raise ValueError("must be a finite number")
+def _not_negative(unit: str, largest: float = math.inf):
+    def check(value: float) -> float:
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ValueError(f"must be zero or positive ({unit})")
+        if value > largest:
+            raise ValueError(f"must be at most {largest:g} {unit}; check the unit")
+        return value
+
+    return AfterValidator(check)
+
+
+def _angle(value: float) -> float:
+    if not (math.isfinite(value) and abs(value) <= limits.ANGLE_DEG):
+        raise ValueError(f"must be a finite angle within +-{limits.ANGLE_DEG:g} degrees (ten turns)")
     return value
 
 
@@ -129,10 +163,29 @@ def _vector(value: list[float]) -> list[float]:
     return value
 
 
+def _point(value: list[float]) -> list[float]:
+    _vector(value)
+    if not all(limits.coordinate_within(v) for v in value):
+        raise ValueError(
+            f"coordinates must lie within +-{limits.COORDINATE_MM:g} mm (100 m); give the point in mm"
+        )
+    return value
+
+
 def _direction(value: list[float]) -> list[float]:
     _vector(value)
-    if math.hypot(*value) < 1e-12:
+    length = math.hypot(*value)
+    if length < 1e-12:
         raise ValueError("a direction cannot be the zero vector; give the fitting axis, e.g. [1, 0, 0]")
+    if not math.isfinite(length):
+        raise ValueError("components too large to give a direction; give the fitting axis, e.g. [1, 0, 0]")
+    return value
+
+
+def _gravity(value: list[float]) -> list[float]:
+    _vector(value)
+    if not math.hypot(*value) <= limits.GRAVITY_M_S2:
+        raise ValueError(f"must be at most {limits.GRAVITY_M_S2:g} m/s^2 long (10 g); give it in m/s^2, e.g. [0, 0, -9.81]")
     return value
 
 
@@ -143,13 +196,20 @@ def _poisson(value: float) -> float:
 
 
 def _segments(value: int) -> int:
-    if value < MIN_SEGMENTS:
-        raise ValueError(f"must be at least {MIN_SEGMENTS}")
+    low, high = limits.SEGMENTS
+    if not low <= value <= high:
+        raise ValueError(f"must be at least {low} and at most {high}")
     return value
 
 
 Vector = Annotated[list[float], AfterValidator(_vector)]
+Point = Annotated[list[float], AfterValidator(_point)]
 Direction = Annotated[list[float], AfterValidator(_direction)]
+Gravity = Annotated[list[float], AfterValidator(_gravity)]
+Angle = Annotated[float, AfterValidator(_angle)]
+
+
+_STIFFNESSES = "a 1 mm rubber cord to a 100 mm steel bar"
 
 
 class _Section(BaseModel):
@@ -159,17 +219,17 @@ class _Section(BaseModel):
 class HoseSection(_Section):
     """[hose]: geometry, stiffness, weight and limits (mm, N*mm^2, N/mm^2, kg/m)."""
 
-    length: Annotated[float, _positive("mm")]
-    outer_diameter: Annotated[float, _positive("mm")]
-    bending_stiffness: Annotated[float, _positive("N*mm^2")] | None = None
-    bending_stiffness_2: Annotated[float, _positive("N*mm^2")] | None = None
-    youngs_modulus: Annotated[float, _positive("N/mm^2")] | None = None
+    length: Annotated[float, _in_range(limits.LENGTH_MM, "mm", "1 mm to 100 m")]
+    outer_diameter: Annotated[float, _in_range(limits.OUTER_DIAMETER_MM, "mm", "capillary tube to dredging hose")]
+    bending_stiffness: Annotated[float, _in_range(limits.STIFFNESS_NMM2, "N*mm^2", _STIFFNESSES)] | None = None
+    bending_stiffness_2: Annotated[float, _in_range(limits.STIFFNESS_NMM2, "N*mm^2", _STIFFNESSES)] | None = None
+    youngs_modulus: Annotated[float, _in_range(limits.YOUNGS_MODULUS_NMM2, "N/mm^2", "soft gel to tungsten")] | None = None
     inner_diameter: Annotated[float, _not_negative("mm")] | None = None
-    torsional_stiffness: Annotated[float, _positive("N*mm^2")] | None = None
-    torsion_factor: Annotated[float, _positive("dimensionless")] | None = None
+    torsional_stiffness: Annotated[float, _in_range(limits.STIFFNESS_NMM2, "N*mm^2", _STIFFNESSES)] | None = None
+    torsion_factor: Annotated[float, _in_range(limits.STIFFNESS_RATIO, "times the isotropic GJ", "hoses lie within 0.1-100")] | None = None
     poisson_ratio: Annotated[float, AfterValidator(_poisson)] | None = None
-    mass_per_length: Annotated[float, _not_negative("kg/m")] = 0.0
-    min_bend_radius: Annotated[float, _not_negative("mm")] | None = None
+    mass_per_length: Annotated[float, _not_negative("kg/m", limits.MASS_PER_LENGTH_KG_M)] = 0.0
+    min_bend_radius: Annotated[float, _not_negative("mm", limits.LENGTH_MM[1])] | None = None
     segments: Annotated[int, AfterValidator(_segments)] = DEFAULT_SEGMENTS
 
     @model_validator(mode="after")
@@ -204,7 +264,45 @@ class HoseSection(_Section):
             raise ValueError(
                 "hose.poisson_ratio is only used with torsion_factor: remove it, torsional_stiffness is given"
             )
+        if self.outer_diameter * limits.SLENDERNESS > self.length:
+            raise ValueError(
+                f"hose.outer_diameter = {_show(self.outer_diameter)} mm is more than 1/{limits.SLENDERNESS:g} of hose.length = "
+                f"{_show(self.length)} mm: a rod model needs a hose at least {limits.SLENDERNESS:g} diameters long"
+            )
+        self._stiffnesses_in_range()
         return self
+
+    def _stiffnesses_in_range(self) -> None:
+        """Refuse an EI computed from youngs_modulus outside the stiffness range, and lopsided stiffness ratios."""
+        bending, torsional = self.stiffnesses()
+        low, high = limits.STIFFNESS_NMM2
+        if not limits.within(bending, limits.STIFFNESS_NMM2):
+            raise ValueError(
+                f"hose.youngs_modulus = {_show(self.youngs_modulus)} N/mm^2 with outer_diameter = "
+                f"{_show(self.outer_diameter)} mm gives EI = {bending:.3g} N*mm^2, outside {low:g}-{high:g} N*mm^2 "
+                f"({_STIFFNESSES}): check the modulus and the diameters"
+            )
+        isotropic = isotropic_torsional_stiffness(bending)
+        given = {"torsional_stiffness": self.torsional_stiffness} if self.torsional_stiffness is not None else {
+            "torsion_factor": self.torsion_factor, "poisson_ratio": self.poisson_ratio}
+        checks = [(given, torsional / isotropic, f"the isotropic GJ = EI / 1.5 = {isotropic:.6g} N*mm^2")]
+        if self.bending_stiffness_2 is not None:
+            checks.append(({"bending_stiffness_2": self.bending_stiffness_2}, self.bending_stiffness_2 / bending,
+                           f"bending_stiffness = {bending:.6g} N*mm^2"))
+        if not limits.within(torsional, limits.STIFFNESS_NMM2):
+            named = ", ".join(f"hose.{key} = {_show(value)}" for key, value in given.items() if value is not None)
+            raise ValueError(
+                f"{named or 'the default torsion'} gives GJ = {torsional:.3g} N*mm^2, outside {low:g}-{high:g} N*mm^2 "
+                f"({_STIFFNESSES}): give a larger torsion_factor or torsional_stiffness"
+            )
+        low, high = limits.STIFFNESS_RATIO
+        for keys, ratio, reference in checks:
+            if not limits.within(ratio, limits.STIFFNESS_RATIO):
+                named = ", ".join(f"hose.{key} = {_show(value)}" for key, value in keys.items() if value is not None)
+                raise ValueError(
+                    f"{named or 'the default torsion'} gives {ratio:.3g} times {reference}: give a value within "
+                    f"{low:g}-{high:g} times it (catalogue hoses lie within 0.1-100)"
+                )
 
     def stiffnesses(self) -> tuple[float, float]:
         """(EI, GJ) in N*mm^2 from whichever keys were given."""
@@ -222,20 +320,20 @@ class HoseSection(_Section):
 class MountSection(_Section):
     """[start] and [end]: the fitting tip (mm) and the direction from the fitting into the hose."""
 
-    point: Vector
+    point: Point
     direction: Direction
 
 
 class EndSection(MountSection):
     """[end]: as [start], plus the twist of the end fitting at assembly (degrees)."""
 
-    twist: Annotated[float, AfterValidator(_finite)] = 0.0
+    twist: Angle = 0.0
 
 
 class EnvironmentSection(_Section):
     """[environment]: gravity vector in m/s^2."""
 
-    gravity: Vector = Field(default_factory=lambda: [0.0, 0.0, 0.0])
+    gravity: Gravity = Field(default_factory=lambda: [0.0, 0.0, 0.0])
 
 
 class FittingSection(_Section):
@@ -254,6 +352,16 @@ class MountsSection(_Section):
     end: FittingSection | None = None  # default: the thesis' D with C ahead of it
 
 
+class ClipSection(_Section):
+    """[[clips]]: one clip (model/clips.py checks the type, the direction and the placement)."""
+
+    type: str
+    arc_length: float
+    point: Point
+    direction: Direction | None = None
+    name: str = ""
+
+
 class ProblemFile(_Section):
     """The whole problem file ([mounts] is resolved into [start] and [end] before this model sees it)."""
 
@@ -263,11 +371,12 @@ class ProblemFile(_Section):
     start: MountSection
     end: EndSection
     environment: EnvironmentSection = Field(default_factory=EnvironmentSection)
+    clips: list[ClipSection] = Field(default_factory=list)
 
     @model_validator(mode="after")
     def _hose_reaches(self) -> "ProblemFile":
         distance = math.dist(self.start.point, self.end.point)
-        if distance >= self.hose.length * (1.0 - 1e-9):
+        if not reaches(self.hose.length, distance):
             relation = "is shorter than" if self.hose.length < distance else "is not longer than"
             raise ValueError(
                 f"hose.length = {_show(self.hose.length)} mm {relation} the mount distance {distance:g} mm: "
@@ -381,6 +490,9 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
         raise ProblemFileError(f"{source}: expected tables [hose], [start] and [end], got {type(data).__name__}")
     if "mounts" in data:
         data = _with_mounts_from_iges(data, source, Path.cwd() if base_dir is None else Path(base_dir))
+    elif isinstance(data.get("clips"), list) and any(isinstance(c, dict) and "tip" in c for c in data["clips"]):
+        raise ProblemFileError(f"{source}: clips: a clip named by tip needs the IGES file of [mounts]; "
+                               "give point and direction instead, or add [mounts]")
     spec = _validated(ProblemFile, data, source)
     bending, torsional = spec.hose.stiffnesses()
     try:
@@ -401,9 +513,18 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             end_twist_deg=spec.end.twist,
             gravity=spec.environment.gravity,
             name=spec.name,
+            clips=tuple(_clip(index, clip) for index, clip in enumerate(spec.clips)),
         )
     except ValueError as exc:  # the model's own checks; its messages name the field
         raise ProblemFileError(f"{source}: {exc}") from None
+
+
+def _clip(index: int, section: ClipSection) -> Clip:
+    """The Clip of a [[clips]] table; its errors name the table."""
+    try:
+        return Clip(section.type, section.point, section.arc_length, section.direction, section.name)
+    except ValueError as exc:
+        raise ValueError(f"clips[{index}]: {exc}") from None
 
 
 def _validated(
@@ -449,8 +570,45 @@ def _with_mounts_from_iges(data: dict, source: str, base_dir: Path) -> dict:
         raise ProblemFileError(f"{source}: mounts.iges = {_show(mounts.iges)}: cannot read {path}: {reason}") from None
     resolved = {key: value for key, value in data.items() if key != "mounts"}
     resolved["start"] = {"point": _floats(start.point), "direction": _floats(start.direction)}
+    if isinstance(data.get("clips"), list):
+        resolved["clips"] = _clips_from_iges(data["clips"], path, source)
     if isinstance(end, dict):
         resolved["end"] = {**end, "point": _floats(end_mount.point), "direction": _floats(end_mount.direction)}
+    return resolved
+
+
+def _clips_from_iges(clips: list, path: Path, source: str) -> list:
+    """The [[clips]] tables with `tip` (and `behind` or `ahead`) replaced by the point and direction read
+    from the IGES file of [mounts]; tables without `tip` are left as they are."""
+    from hoseline.io import iges_mounts
+
+    labels, where = [], []
+    for index, clip in enumerate(clips):
+        if not isinstance(clip, dict) or "tip" not in clip:
+            continue
+        given = [key for key in ("point", "direction") if key in clip]
+        if given:
+            raise ProblemFileError(f"{source}: clips[{index}]: {' and '.join(given)} given together with tip: "
+                                   f"the clip comes from the IGES file; remove {', '.join(given)} or tip")
+        axis = {key: clip[key] for key in ("behind", "ahead") if key in clip}
+        try:
+            labels.append(iges_mounts.FittingLabels(tip=clip["tip"], **axis) if axis else str(clip["tip"]))
+        except ValueError as exc:
+            raise ProblemFileError(f"{source}: clips[{index}]: {exc}") from None
+        where.append(index)
+    if not labels:
+        return clips
+    try:
+        read = iges_mounts.clip_points_from_iges(path, labels)
+    except iges_mounts.IgesError as exc:
+        raise ProblemFileError(f"{source}: clips: {exc}") from None
+    resolved = list(clips)
+    for index, (point, direction) in zip(where, read):
+        table = {key: value for key, value in clips[index].items() if key not in ("tip", "behind", "ahead")}
+        table["point"] = _floats(point)
+        if direction is not None:
+            table["direction"] = _floats(direction)
+        resolved[index] = table
     return resolved
 
 
@@ -511,7 +669,14 @@ def problem_to_dict(problem: Problem) -> dict:
             "twist": float(problem.end_twist_deg),
         },
         "environment": {"gravity": _floats(problem.gravity)},
-    }
+    } | ({"clips": [_clip_dict(clip) for clip in problem.clips]} if problem.clips else {})
+
+
+def _clip_dict(clip: Clip) -> dict[str, Any]:
+    out: dict[str, Any] = {"type": clip.kind, "arc_length": float(clip.arc_length), "point": _floats(clip.point)}
+    if clip.direction is not None:
+        out["direction"] = _floats(clip.direction)
+    return out | ({"name": clip.name} if clip.name else {})
 
 
 def _floats(vector: np.ndarray) -> list[float]:
@@ -522,11 +687,13 @@ def problem_to_toml(problem: Problem) -> str:
     """The problem as a commented TOML problem file that load_problem reads back."""
     lines = []
     for key, value in problem_to_dict(problem).items():
-        if isinstance(value, dict):
-            lines.append(f"\n[{key}]")
-            for name, item in value.items():
-                text = f"{name} = {_toml_value(item)}"
-                lines.append(f"{text:<45} # {_UNITS[name]}")
+        tables = [value] if isinstance(value, dict) else value if isinstance(value, list) and key == "clips" else None
+        if tables is not None:
+            for table in tables:
+                lines.append(f"\n[{key}]" if isinstance(value, dict) else f"\n[[{key}]]")
+                for name, item in table.items():
+                    text = f"{name} = {_toml_value(item)}"
+                    lines.append(f"{text:<45} # {_UNITS.get(f'{key}.{name}', _UNITS.get(name))}")
         else:
             lines.append(f"{key} = {_toml_value(value)}")
     return "\n".join(lines) + "\n"

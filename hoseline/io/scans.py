@@ -3,12 +3,18 @@
 Points are taken as they are, in mm, in the coordinate system of the mounts (the
 scanner's reference markers put them there).  Messages for bad files name the file, the
 line (or the element) and the fix.  write_ply writes a cloud (binary PLY) atomically.
+
+Scans of millions of points: binary PLY vertices are read straight into a structured array
+(the faces after them are not read); text and ascii PLY are parsed by NumPy's C reader
+(np.loadtxt, streaming the file), and only when it refuses a file is it read again line by
+line, to name the line that is wrong.
 """
 
 from __future__ import annotations
 
 import re
 import struct
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +28,7 @@ PLY_TYPES = {
     "double": "f8", "float64": "f8",
 }
 MIN_POINTS = 20
+PLY_HEADER_BYTES = 1 << 20
 
 
 class ScanFileError(ValueError):
@@ -41,13 +48,12 @@ def read_scan(path: str | Path, min_points: int = MIN_POINTS) -> np.ndarray:
         raise ScanFileError(
             f"{path}: unknown scan format '{path.suffix}': use .ply, .stl or a text file (.xyz, .csv, .txt, .asc, .pts)"
         )
-    data = path.read_bytes()
     reader = {"PLY": _read_ply, "STL": _read_stl, "text": _read_text}[kind]
-    points = reader(data, str(path))
+    points = reader(path)
     if points.shape[0] < min_points:
         raise ScanFileError(f"{path}: only {points.shape[0]} points; at least {min_points} are needed")
-    bad = np.flatnonzero(~np.all(np.isfinite(points), axis=1))
-    if bad.size:
+    if not np.isfinite(points).all():
+        bad = np.flatnonzero(~np.all(np.isfinite(points), axis=1))
         raise ScanFileError(f"{path}: point {bad[0]} is not finite ({points[bad[0]].tolist()}); remove it from the scan")
     return points
 
@@ -62,32 +68,75 @@ def write_ply(path: str | Path, points: np.ndarray) -> Path:
     return write_bytes(path, header.encode("ascii") + points.tobytes())
 
 
-def _read_text(data: bytes, source: str) -> np.ndarray:
+def _read_text(path: Path) -> np.ndarray:
     """x y z per line (spaces, tabs, commas or semicolons); one header line and # comments are skipped."""
+    with open(path, "rb") as file:
+        head = file.read(4096).split(b"\n")
+    skip = 0
+    for number, line in enumerate(head[:2], start=1):  # a header such as "x,y,z" on the first two lines
+        fields = _fields(line.decode("utf-8-sig", errors="replace"))
+        if fields and _numbers(fields[:3]) is not None:
+            break
+        if fields:
+            skip = number
+    sample = b"".join(line.split(b"#", 1)[0] for line in head[skip:])  # the separator of the first rows
+    delimiter = "," if b"," in sample else ";" if b";" in sample else None  # None: any whitespace
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": read_scan counts the points
+            return np.loadtxt(path, delimiter=delimiter, skiprows=skip, usecols=(0, 1, 2), comments="#", ndmin=2,
+                              encoding="utf-8-sig")
+    except (ValueError, UnicodeDecodeError):  # mixed separators or a bad line: read again line by line
+        return _read_text_lines(path.read_bytes(), str(path))
+
+
+def _fields(line: str) -> list[str]:
+    """The fields of a text line without its # comment, split at spaces, tabs, commas and semicolons."""
+    return [f for f in re.split(r"[\s,;]+", line.split("#", 1)[0].strip()) if f]
+
+
+def _numbers(fields: list[str]) -> list[float] | None:
+    """The fields as floats, or None if one is not a number."""
+    try:
+        return [float(f) for f in fields]
+    except ValueError:
+        return None
+
+
+def _read_text_lines(data: bytes, source: str) -> np.ndarray:
+    """_read_text one line at a time (slow): names the first line that is not x y z."""
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise ScanFileError(f"{source}: not a text file; save the points as UTF-8 text with x, y, z per line") from None
     rows = []
     for number, line in enumerate(text.splitlines(), start=1):
-        line = line.split("#", 1)[0].strip()
-        if not line:
+        fields = _fields(line)
+        if not fields:
             continue
-        fields = [f for f in re.split(r"[\s,;]+", line) if f]
-        try:
-            values = [float(f) for f in fields[:3]]
-        except ValueError:
+        values = _numbers(fields[:3])
+        if values is None:
             if not rows and number <= 2:  # a header such as "x,y,z"
                 continue
-            raise ScanFileError(f"{source}, line {number}: '{line[:60]}' is not three numbers x y z (mm)") from None
+            raise ScanFileError(f"{source}, line {number}: '{line.split('#', 1)[0].strip()[:60]}' is not three "
+                                "numbers x y z (mm)")
         if len(values) < 3:
-            raise ScanFileError(f"{source}, line {number}: '{line[:60]}' has {len(values)} numbers; give x y z (mm)")
+            raise ScanFileError(f"{source}, line {number}: '{line.split('#', 1)[0].strip()[:60]}' has {len(values)} "
+                                "numbers; give x y z (mm)")
         rows.append(values)
     return np.array(rows, dtype=float).reshape(-1, 3)
 
 
-def _read_ply(data: bytes, source: str) -> np.ndarray:
+def _ply_header(path: Path) -> bytes:
+    """The start of a PLY file: its first MiB, which holds the header of any point cloud export."""
+    with open(path, "rb") as file:
+        return file.read(PLY_HEADER_BYTES)
+
+
+def _read_ply(path: Path) -> np.ndarray:
     """The x, y, z properties of the vertex element (ascii, binary little or big endian)."""
+    source = str(path)
+    data = _ply_header(path)
     end = data.find(b"end_header")
     if not data.startswith(b"ply") or end < 0:
         raise ScanFileError(f"{source}: not a PLY file (it must start with 'ply' and have an 'end_header' line)")
@@ -124,33 +173,47 @@ def _read_ply(data: bytes, source: str) -> np.ndarray:
     if any(dtype is None for _, dtype in properties):
         raise ScanFileError(f"{source}: list properties on PLY vertices are not supported; export x, y, z only")
     if fmt == "ascii":
-        lines = data[body_start:].decode("ascii", errors="replace").split("\n")[:count]
-        if len(lines) < count or (count and not lines[-1].strip()):
-            raise ScanFileError(f"{source}: the header announces {count} vertices; the file has fewer lines")
-        first_line = data[:body_start].count(b"\n") + 1
-        table = np.empty((count, len(names)))
-        for index, line in enumerate(lines):
-            try:
-                row = [float(v) for v in line.split()[: len(names)]]
-            except ValueError:
-                row = []
-            if len(row) != len(names):
-                raise ScanFileError(f"{source}, line {first_line + index}: '{line.strip()[:60]}' is not "
-                                    f"{len(names)} numbers ({', '.join(names)})")
-            table[index] = row
-        columns = {name: table[:, i] for i, name in enumerate(names)}
-    else:
-        order = "<" if fmt == "binary_little_endian" else ">"
-        dtype = np.dtype([(name, order + code) for name, code in properties])
-        if len(data) - body_start < dtype.itemsize * count:
-            raise ScanFileError(f"{source}: the header announces {count} vertices; the file is too short for them")
-        table = np.frombuffer(data, dtype=dtype, count=count, offset=body_start)
-        columns = {name: table[name].astype(float) for name in names}
-    return np.column_stack([columns["x"], columns["y"], columns["z"]])
+        header_lines = data[:body_start].count(b"\n")
+        try:
+            points = np.loadtxt(path, skiprows=header_lines, max_rows=count, usecols=[names.index(a) for a in "xyz"],
+                                comments=None, ndmin=2, encoding="latin-1")
+        except ValueError:
+            points = None
+        if points is None or points.shape[0] != count:  # read again line by line to name the line
+            return _read_ply_ascii_lines(path.read_bytes()[body_start:], source, count, names, header_lines + 1)
+        return points
+    order = "<" if fmt == "binary_little_endian" else ">"
+    dtype = np.dtype([(name, order + code) for name, code in properties])
+    if path.stat().st_size - body_start < dtype.itemsize * count:
+        raise ScanFileError(f"{source}: the header announces {count} vertices; the file is too short for them")
+    table = np.fromfile(path, dtype=dtype, count=count, offset=body_start)
+    points = np.empty((count, 3))
+    for axis, name in enumerate("xyz"):
+        points[:, axis] = table[name]
+    return points
 
 
-def _read_stl(data: bytes, source: str) -> np.ndarray:
+def _read_ply_ascii_lines(body: bytes, source: str, count: int, names: list[str], first_line: int) -> np.ndarray:
+    """The x, y, z of `count` ascii PLY vertex lines, one at a time (slow): names the first bad line.
+
+    body: the file after the header; first_line: the body's first line number in the file.
+    """
+    lines = body.decode("ascii", errors="replace").split("\n")[:count]
+    if len(lines) < count or (count and not lines[-1].strip()):
+        raise ScanFileError(f"{source}: the header announces {count} vertices; the file has fewer lines")
+    table = np.empty((count, len(names)))
+    for index, line in enumerate(lines):
+        row = _numbers(line.split()[: len(names)]) or []
+        if len(row) != len(names):
+            raise ScanFileError(f"{source}, line {first_line + index}: '{line.strip()[:60]}' is not "
+                                f"{len(names)} numbers ({', '.join(names)})")
+        table[index] = row
+    return table[:, [names.index(a) for a in "xyz"]]
+
+
+def _read_stl(path: Path) -> np.ndarray:
     """The distinct vertices of an ASCII or binary STL."""
+    data, source = path.read_bytes(), str(path)
     if len(data) >= 84:
         triangles = struct.unpack("<I", data[80:84])[0]
         if len(data) == 84 + 50 * triangles:

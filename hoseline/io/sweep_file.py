@@ -44,14 +44,15 @@ from hoseline.io.obstacle_mesh import ObstacleFileError, read_mesh
 from hoseline.io.pose_table import PoseTableError, read_pose_table
 from hoseline.io.problem_file import (
     Direction,
+    Point,
     ProblemFileError,
-    Vector,
     _not_negative,
     _Section,
     _validated,
     problem_from_dict,
     read_toml,
 )
+from hoseline.model import limits
 from hoseline.model.motion import BodyMotion, Rotation, Translation, generated_motion
 from hoseline.model.sweep import DEFAULT_CLEARANCE, Obstacle, SweepProblem
 
@@ -62,30 +63,34 @@ class SweepFileError(ProblemFileError):
     """A sweep file that cannot describe a sweep; the message names the field, the value and the fix."""
 
 
-def _range(value: list[float]) -> list[float]:
-    if len(value) != 2 or not all(math.isfinite(v) for v in value):
-        raise ValueError("must be [from, to], two finite numbers")
+def _range(largest: float, unit: str):
+    """[from, to]: two finite numbers within +-largest (unit)."""
+
+    def check(value: list[float]) -> list[float]:
+        if len(value) != 2 or not all(math.isfinite(v) for v in value):
+            raise ValueError("must be [from, to], two finite numbers")
+        if not all(abs(v) <= largest for v in value):
+            raise ValueError(f"must lie within +-{largest:g} {unit}")
+        return value
+
+    return AfterValidator(check)
+
+
+def _steps(value: int) -> int:
+    if not 1 <= value <= limits.STAGE_STEPS:
+        raise ValueError(f"must be at least 1 and at most {limits.STAGE_STEPS}")
     return value
-
-
-def _at_least_one(value: int) -> int:
-    if value < 1:
-        raise ValueError("must be at least 1")
-    return value
-
-
-Range = Annotated[list[float], AfterValidator(_range)]
 
 
 class StageSection(_Section):
     """A generated stage of a body's motion: a rotation or a translation."""
 
     name: str | None = None
-    rotate: Range | None = None
-    translate: Range | None = None
+    rotate: Annotated[list[float], _range(limits.ANGLE_DEG, "degrees (ten turns)")] | None = None
+    translate: Annotated[list[float], _range(limits.COORDINATE_MM, "mm (100 m)")] | None = None
     axis: Direction
-    point: Vector | None = None
-    steps: Annotated[int, AfterValidator(_at_least_one)] = 20
+    point: Point | None = None
+    steps: Annotated[int, AfterValidator(_steps)] = 20
 
     @model_validator(mode="after")
     def _one_motion(self) -> "StageSection":
@@ -127,7 +132,7 @@ class ObstacleSection(_Section):
 
     name: str | None = None
     file: str
-    clearance: Annotated[float, _not_negative("mm")] = DEFAULT_CLEARANCE
+    clearance: Annotated[float, _not_negative("mm", limits.CLEARANCE_MM)] = DEFAULT_CLEARANCE
     body: str | None = None
 
 
@@ -188,6 +193,9 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
         raise
     except ProblemFileError as exc:
         raise SweepFileError(str(exc)) from None
+    if problem.clips:
+        raise SweepFileError(f"{source}: [[clips]]: sweeps do not carry clips yet; remove the [[clips]] tables "
+                             "(a placement with clips: hoseline solve)")
     tables = _validated(SweepTables, sweep_part, source, error=SweepFileError)
     motions = tuple(_motion(body, base, source) for body in tables.bodies)
     obstacles = tuple(_obstacle(item, base, source) for item in tables.obstacles)

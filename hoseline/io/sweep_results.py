@@ -1,39 +1,55 @@
-"""Data files of a sweep: poses.csv (one row per pose), shapes.csv (every station of every pose), sweep.json.
+"""Data files of a sweep: poses.csv (one row per pose), shapes.csv (every station of every pose), sweep.json,
+envelope.stl (the swept envelope) and obstacle_<name>.stl for each obstacle made in code rather than read from a file.
 
-The report (HTML, PNG) and the swept envelope (STL) are written by report/sweep_report.py,
-which puts these files beside them.
+Numbers are written with 8 significant digits; a number smaller than ROUND_OFF times the
+largest magnitude of its quantity (round-off such as 3e-45 where the exact value is 0) is
+written as 0.  The report (HTML, PNG) is written by report/sweep_report.py, which puts
+these files beside it.
 """
 
 from __future__ import annotations
 
 import csv
 import io
+import re
 from pathlib import Path
 
 import numpy as np
 
 from hoseline.io.atomic import write_text
+from hoseline.io.obstacle_mesh import write_stl
 from hoseline.io.problem_file import problem_to_dict
 from hoseline.io.results import _json, _plain
+from hoseline.model.sweep import SweepProblem
+from hoseline.procedures.sweep.envelope import Envelope
 from hoseline.procedures.sweep.result import SweepResult
+
+ROUND_OFF = 1e-12  # relative to the quantity's largest magnitude: below it, a number is written as 0
+ENVELOPE_FILE = "envelope.stl"
 
 
 def poses_csv(result: SweepResult) -> str:
-    """One row per pose: stage, travel, clearance to each obstacle, bend radius, moments, reactions (mm, N, N*mm)."""
+    """One row per pose: stage, travel, the fitting tips and directions, clearance to each obstacle,
+    bend radius, moments, reactions (mm, N, N*mm; directions are unit vectors into the hose)."""
     columns = {"pose": np.arange(result.pose_count), "stage": [_stage(result, k) for k in range(result.pose_count)],
-               "travel": result.sweep.travel}
+               "travel": without_round_off(result.sweep.travel)}
+    for end in ("start", "end"):
+        points = without_round_off(getattr(result, f"{end}_points"))
+        directions = without_round_off(getattr(result, f"{end}_directions"))
+        columns.update({f"{end}_{axis}_mm": points[:, i] for i, axis in enumerate("xyz")})
+        columns.update({f"{end}_direction_{axis}": directions[:, i] for i, axis in enumerate("xyz")})
     for clearance in result.clearances:
-        columns[f"clearance_{clearance.obstacle.name}_mm"] = clearance.distance
-        columns[f"clearance_{clearance.obstacle.name}_s_mm"] = clearance.s
-    columns["min_bend_radius_mm"] = result.min_bend_radius
-    columns["max_twisting_moment_Nmm"] = result.max_twisting_moment
-    columns["max_differential_torque_Nmm"] = result.max_differential_torque
-    columns["single_plane_offset_mm"] = result.single_plane_offset
+        columns[f"clearance_{clearance.obstacle.name}_mm"] = without_round_off(clearance.distance)
+        columns[f"clearance_{clearance.obstacle.name}_s_mm"] = without_round_off(clearance.s)
+    columns["min_bend_radius_mm"] = without_round_off(result.min_bend_radius)
+    columns["max_twisting_moment_Nmm"] = without_round_off(result.max_twisting_moment)
+    columns["max_differential_torque_Nmm"] = without_round_off(result.max_differential_torque)
+    columns["single_plane_offset_mm"] = without_round_off(result.single_plane_offset)
     for name in ("start_force", "start_moment", "end_force", "end_moment"):
         unit = "N" if name.endswith("force") else "Nmm"
-        columns[f"{name}_{unit}"] = np.linalg.norm(getattr(result, name), axis=1)
+        columns[f"{name}_{unit}"] = without_round_off(np.linalg.norm(getattr(result, name), axis=1))
     if result.separation is not None:
-        columns["free_roll_separation_mm"] = result.separation
+        columns["free_roll_separation_mm"] = without_round_off(result.separation)
     columns["newton_iterations"] = result.iterations
     stream = io.StringIO()
     writer = csv.writer(stream, lineterminator="\n")
@@ -44,20 +60,24 @@ def poses_csv(result: SweepResult) -> str:
 
 
 def shapes_csv(result: SweepResult) -> str:
-    """Every station of every pose: pose, s, x, y, z (mm)."""
+    """Every station of every pose: pose, s, x, y, z (mm, 8 significant digits)."""
+    s = without_round_off(result.s)
+    centerlines = without_round_off(result.centerlines)
     rows = ["pose,s,x,y,z"]
-    for k, line in enumerate(result.centerlines):
-        rows.extend(f"{k},{s:.6g},{x:.8g},{y:.8g},{z:.8g}" for s, (x, y, z) in zip(result.s, line))
+    for k, line in enumerate(centerlines):
+        rows.extend(f"{k},{_cell(length)},{_cell(x)},{_cell(y)},{_cell(z)}" for length, (x, y, z) in zip(s, line))
     return "\n".join(rows) + "\n"
 
 
-def sweep_document(result: SweepResult) -> dict:
-    """What sweep.json holds: the problem, the run's figures, worst cases, snaps, events, per-pose values."""
-    return _plain({
+def sweep_document(result: SweepResult, envelope: Envelope | None = None) -> dict:
+    """What sweep.json holds: the problem, the obstacles (and their files), the run's figures, worst
+    cases, snaps, events, stages, travel, and the envelope's grid when one was made."""
+    written = obstacle_files(result.sweep)
+    document = {
         "problem": problem_to_dict(result.sweep.problem),
         "bodies": {"start": result.sweep.start_body, "end": result.sweep.end_body},
-        "obstacles": [{"name": o.name, "file": o.source, "clearance_mm": o.clearance, "body": o.body,
-                       "triangles": len(o.faces)} for o in result.sweep.obstacles],
+        "obstacles": [{"name": o.name, "file": written.get(k, o.source), "clearance_mm": o.clearance, "body": o.body,
+                       "triangles": len(o.faces)} for k, o in enumerate(result.sweep.obstacles)],
         "performance": result.performance(),
         "worst_cases": result.worst_cases(),
         "first_violation": {c.obstacle.name: c.first_violation for c in result.clearances},
@@ -66,17 +86,54 @@ def sweep_document(result: SweepResult) -> dict:
         "events": result.events,
         "stages": [{"name": s.name, "unit": s.unit, "first_pose": s.first, "poses": s.count}
                    for s in result.sweep.stages],
-        "travel": result.sweep.travel,
+        "travel": without_round_off(result.sweep.travel),
         "assembly": result.assembly.summary(),
-    })
+    }
+    if envelope is not None:
+        document["envelope"] = {
+            "file": ENVELOPE_FILE,
+            "cell_mm": envelope.cell,
+            "requested_cell_mm": envelope.requested_cell,
+            "radius_mm": envelope.radius,
+            "triangles": len(envelope.faces),
+            "accuracy": "the surface is within about one cell of the exact union of the hose's tube over the poses "
+                        "(of radius_mm: the hose's, or one cell when the hose is thinner)",
+        }
+    return _plain(document)
 
 
-def write_sweep_data(result: SweepResult, folder: str | Path) -> None:
-    """Write poses.csv, shapes.csv and sweep.json into an existing folder (atomically, file by file)."""
+def write_sweep_data(result: SweepResult, folder: str | Path, envelope: Envelope | None = None) -> None:
+    """Write poses.csv, shapes.csv, sweep.json, the envelope (if given) and the obstacles made in code
+    into an existing folder (atomically, file by file)."""
     folder = Path(folder)
     write_text(folder / "poses.csv", poses_csv(result))
     write_text(folder / "shapes.csv", shapes_csv(result))
-    write_text(folder / "sweep.json", _json(sweep_document(result)) + "\n")
+    if envelope is not None:
+        write_stl(folder / ENVELOPE_FILE, envelope.vertices, envelope.faces)
+    for k, name in obstacle_files(result.sweep).items():
+        obstacle = result.sweep.obstacles[k]
+        write_stl(folder / name, obstacle.vertices, obstacle.faces)
+    write_text(folder / "sweep.json", _json(sweep_document(result, envelope)) + "\n")
+
+
+def obstacle_files(sweep: SweepProblem) -> dict[int, str]:
+    """File names for the obstacles not read from a file (no `source`), by obstacle index: obstacle_<name>.stl."""
+    names: dict[int, str] = {}
+    for k, obstacle in enumerate(sweep.obstacles):
+        if obstacle.source:
+            continue
+        stem = re.sub(r"[^A-Za-z0-9_-]+", "_", obstacle.name).strip("_") or str(k)
+        name = f"obstacle_{stem}.stl"
+        names[k] = name if name not in names.values() else f"obstacle_{stem}_{k}.stl"
+    return names
+
+
+def without_round_off(values) -> np.ndarray:
+    """`values` (an array of one quantity, any shape), entries below ROUND_OFF times its largest magnitude set to 0."""
+    values = np.asarray(values, dtype=float)
+    finite = np.abs(values[np.isfinite(values)])
+    scale = finite.max() if finite.size else 0.0
+    return np.where(np.abs(values) < ROUND_OFF * scale, 0.0, values) + 0.0  # + 0.0: no -0 either
 
 
 def _stage(result: SweepResult, k: int) -> str:

@@ -129,7 +129,9 @@ def symmetric_3x3_positive_count(s):
     if p2 <= 1e-300:
         return 3 if mean > 0.0 else 0
     p = np.sqrt(p2 / 6.0)
-    b = (s - mean * np.eye(3)) / p
+    b = s / p
+    for k in range(3):  # b = (s - mean I) / p, without compiling np.eye
+        b[k, k] -= mean / p
     det_half = 0.5 * (
         b[0, 0] * (b[1, 1] * b[2, 2] - b[1, 2] * b[2, 1])
         - b[0, 1] * (b[1, 0] * b[2, 2] - b[1, 2] * b[2, 0])

@@ -217,7 +217,8 @@ def assemble(
     energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab)
     if springs is not None:
         energy += spring_terms_into(start_frame, frames[0], springs, HALF, g, haa, hab)
-    grad[0:3] -= g
+    for x in range(3):  # element by element: a slice assignment compiles Numba's shape-error messages (0.5 s)
+        grad[x] -= g[x]
     _add_diag_block(band, 0, haa)
     for i in range(n_seg - 1):
         energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab)
@@ -287,7 +288,8 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
         joint_terms_into(fa, fb, stiffness, length, g, haa, hab)
         if springs is not None:
             spring_terms_into(fa, fb, springs, kind, g, haa, hab)
-        moments[j] = -g
+        for x in range(3):
+            moments[j, x] = -g[x]
         a0, a1, a2, c = _axial_and_c(fa, fb)
         darboux[j, 0] = 2.0 * a0 / (c * length)
         darboux[j, 1] = 2.0 * a1 / (c * length)

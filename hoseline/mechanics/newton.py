@@ -104,7 +104,10 @@ def _system_kernel(
             weight_potential -= h * line_weight[k] * (tip[k] - start_point[k] + 0.5 * h * frames[i, 2, k])
             tip[k] += h * frames[i, 2, k]
     if end_clamped:
-        jac_t[: 3 * n_seg] = constraint_jacobian_t(frames, h)
+        block = constraint_jacobian_t(frames, h)
+        for r in range(3 * n_seg):  # element by element: a slice assignment compiles Numba's shape-error messages
+            for k in range(3):
+                jac_t[r, k] = block[r, k]
         constraint = tip - end_point
     else:
         constraint = np.zeros(3)
@@ -119,6 +122,10 @@ def _system_kernel(
 
 def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
     """Assemble the Lagrangian's gradient and Hessian, the constraint and the residual at a state."""
+    if clamps.clips:
+        from hoseline.mechanics import clipped_newton  # it builds on this module
+
+        return clipped_newton.evaluate(props, clamps, state)
     roll_free = clamps.roll_free and clamps.end_clamped
     force = state.end_force if clamps.end_clamped else clamps.end_load
     end_point = clamps.end_point if clamps.end_clamped else clamps.start_point
@@ -158,6 +165,10 @@ def total_energy(props: RodProperties, clamps: Clamps, state: RodState) -> float
 
 def apply_step(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, force_step: np.ndarray) -> RodState:
     """A new state: every frame rotated by its part of `step` (rad), roll advanced, force updated (N)."""
+    if clamps.clips:
+        from hoseline.mechanics import clipped_newton
+
+        return clipped_newton.apply_step(props, clamps, state, step, force_step)
     n_seg = props.segments
     frames = rotate_frames(state.frames, step[: 3 * n_seg].reshape(n_seg, 3))
     roll = state.roll + (float(step[3 * n_seg]) if step.size > 3 * n_seg else 0.0)
@@ -177,7 +188,14 @@ def solve_equilibrium(
 
     Returns the final state and a report; the state is only meaningful when report.converged.
     tolerance: relative residual of force and moment balance.  minimise: see module doc.
+    With clips (clamps.clips) the iteration is that of mechanics/clipped_newton.py.
     """
+    if clamps.clips:
+        from hoseline.mechanics import clipped_newton
+
+        return clipped_newton.solve_equilibrium(
+            props, clamps, state, tolerance=tolerance, max_iterations=max_iterations, minimise=minimise
+        )
     kernel = _minimise_kernel if minimise else _track_kernel
     roll_free = clamps.roll_free and clamps.end_clamped
     frames, force, roll, converged, iterations, residual, unstable, failure = kernel(
@@ -208,7 +226,12 @@ def _roll_frame(frame, roll):
     """The frame turned by `roll` (rad) about its own d3."""
     if roll == 0.0:
         return frame
-    return frame @ rotation_matrix(roll * frame[2]).T
+    turn = rotation_matrix(roll * frame[2])
+    out = np.empty((3, 3))
+    for k in range(3):  # every director d -> turn d, written out (a matrix product compiles Numba's BLAS glue)
+        for x in range(3):
+            out[k, x] = turn[x, 0] * frame[k, 0] + turn[x, 1] * frame[k, 1] + turn[x, 2] * frame[k, 2]
+    return out
 
 
 @njit(cache=True)

@@ -30,22 +30,48 @@ class Clamps:
     roll_free: bool
     line_weight: np.ndarray
     end_load: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    clips: tuple["ClipHold", ...] = ()
 
     @property
     def end_clamped(self) -> bool:
         return self.end_point is not None
 
 
+@dataclass(frozen=True)
+class ClipHold:
+    """One intermediate support of the rod (mechanics/clipped.py), in internal units.
+
+    node: station index k (1 <= k <= N-1) held, at arc length k h.  point: (3,) mm, where the
+    station is held.  frame: (3, 3) clip frame (rows d1, d2, d3; d3 along the hose) or None for
+    a ball clip (position only).  roll_free: the frame may spin about its d3 (a rotating clip,
+    or any framed clip while it is carried to its place).
+    """
+
+    node: int
+    point: np.ndarray
+    frame: np.ndarray | None
+    roll_free: bool
+
+
 @dataclass
 class RodState:
-    """Unknowns of the rod: segment frames (N,3,3), end-mount force mu (N), end roll (rad, accumulated)."""
+    """Unknowns of the rod: segment frames (N,3,3), end-mount force mu (N), end roll (rad, accumulated).
+
+    With clips (Clamps.clips): clip_forces (c, 3), the force of each clip on the hose (N), and
+    clip_rolls (c,), the roll of each clip frame about its axis (rad, accumulated; used while
+    the clip's roll is free).  Empty without clips; a solve starts them at zero if they do not
+    match the clamps' clips.
+    """
 
     frames: np.ndarray
     end_force: np.ndarray
     roll: float = 0.0
+    clip_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    clip_rolls: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def copy(self) -> "RodState":
-        return RodState(self.frames.copy(), self.end_force.copy(), self.roll)
+        return RodState(self.frames.copy(), self.end_force.copy(), self.roll, self.clip_forces.copy(),
+                        self.clip_rolls.copy())
 
 
 @njit(cache=True)
@@ -53,7 +79,8 @@ def centerline(frames, start_point, h):
     """Node positions (N+1, 3) in mm: x_0 = start point, x_{i+1} = x_i + h d3_i."""
     n = frames.shape[0]
     out = np.empty((n + 1, 3))
-    out[0] = start_point
+    for k in range(3):  # element by element: a row assignment compiles Numba's shape-error messages
+        out[0, k] = start_point[k]
     for i in range(n):
         for k in range(3):  # element by element: a vector expression here would allocate per segment
             out[i + 1, k] = out[i, k] + h * frames[i, 2, k]

@@ -16,6 +16,7 @@ import scipy.linalg
 from numba import njit
 
 from hoseline.mechanics.banded import banded_matvec, kkt_solve, ldlt_banded, ldlt_solve, solve_3x3
+from hoseline.mechanics.bordered import kkt_solve_bordered
 
 
 def _band_to_dense(band: np.ndarray) -> np.ndarray:
@@ -39,13 +40,14 @@ def smallest_eigenpairs(band: np.ndarray, jac_t: np.ndarray, count: int = 1, tol
     """The `count` algebraically smallest eigenvalues (N*mm/rad^2) and unit eigenvectors of the
     Hessian restricted to {v : J v = 0}.
 
-    band: lower band storage of the Hessian; jac_t: (n, 3) transposed constraint Jacobian.
+    band: lower band storage of the Hessian; jac_t: (n, m) transposed constraint Jacobian (m = 3, or 3 + 3c with clips).
     tolerance: relative residual of the eigenpairs (the eigenvalues are then accurate to
     about its square).
     """
-    n = band.shape[0]
+    n, m = jac_t.shape
     lower, diag, tiny = ldlt_banded(band, 0.0)
-    negative = int(kkt_solve(lower, diag, jac_t, np.zeros(n), np.zeros(3))[2])
+    solve = kkt_solve if m == 3 else kkt_solve_bordered  # a border of 3 + 3c rows with clips
+    negative = int(solve(lower, diag, jac_t, np.zeros(n), np.zeros(m))[2])
     if tiny or n < 40:
         return _dense_pairs(band, jac_t, count)
     block = max(count, negative) + 3
@@ -65,10 +67,18 @@ def _start_block(n: int, block: int) -> np.ndarray:
 
 
 @njit(cache=True)
+def _solve_small(matrix, rhs):
+    # matrix^-1 rhs for the m x m border matrices: closed form for the end alone (m = 3), LAPACK with clips
+    if matrix.shape[0] == 3:
+        return solve_3x3(matrix, rhs)
+    return np.ascontiguousarray(np.linalg.solve(matrix, rhs))
+
+
+@njit(cache=True)
 def _solve_projected(lower, diag, jac_t, h_inv_jt, schur, rhs):
     # [[H, J^T], [J, 0]] [w; y] = [rhs; 0]  ->  w = H^-1 (rhs - J^T y), J w = 0
     h_inv_rhs = ldlt_solve(lower, diag, rhs)
-    y = solve_3x3(schur, jac_t.T @ h_inv_rhs)
+    y = _solve_small(schur, jac_t.T @ h_inv_rhs)
     return h_inv_rhs - h_inv_jt @ y
 
 
@@ -92,7 +102,7 @@ def _subspace_iteration(band, jac_t, lower, diag, start, count, tolerance):
         ritz_values, ritz_vectors = np.linalg.eigh(vectors.T @ hv)
         vectors = vectors @ ritz_vectors
         raw = hv @ ritz_vectors - vectors * ritz_values
-        raw -= jac_t @ solve_3x3(normal, jac_t.T @ raw)  # only the part within the tangent space counts
+        raw -= jac_t @ _solve_small(normal, jac_t.T @ raw)  # only the part within the tangent space counts
         residual = np.sqrt(np.sum(raw**2, axis=0))
         scale = max(abs(ritz_values[0]), 1e-30 * band_scale + 1e-300)
         values = ritz_values

@@ -135,6 +135,9 @@ class BodyMotion:
     def __post_init__(self) -> None:
         if len(self.poses) != len(self.travel) or len(self.poses) == 0:
             raise ValueError(f"body '{self.name}': {len(self.poses)} poses but {len(self.travel)} travel values")
+        for index, pose in enumerate(self.poses):
+            if not (np.all(np.isfinite(pose.rotation)) and np.all(np.isfinite(pose.position))):
+                raise ValueError(f"body '{self.name}': pose {index} is not finite: give finite translations and rotations")
 
 
 @dataclass(frozen=True)

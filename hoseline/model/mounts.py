@@ -21,10 +21,11 @@ def unit_vector(vector, name: str) -> np.ndarray:
         raise ValueError(f"{name} = {list(v)}: must have exactly three components (x, y, z)")
     if not np.all(np.isfinite(v)):
         raise ValueError(f"{name} = {list(v)}: components must be finite numbers")
-    norm = float(np.linalg.norm(v))
+    scale = float(np.max(np.abs(v)))  # scaled first: the norm of [1e308, 1e308, 0] would overflow to inf
+    norm = scale * float(np.linalg.norm(v / scale)) if scale > 0.0 else 0.0
     if norm < 1e-12:
         raise ValueError(f"{name} = {list(v)}: a direction cannot be the zero vector; give the fitting axis, e.g. [1, 0, 0]")
-    return v / norm
+    return (v / scale) / float(np.linalg.norm(v / scale))
 
 
 @dataclass(frozen=True)

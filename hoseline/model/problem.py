@@ -6,8 +6,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hoseline.model.clips import Clip, clip_node, off_station_message
 from hoseline.model.hose import Hose
 from hoseline.model.mounts import Mount, mount_distance
+
+STRAIGHT_MARGIN = 1e-9  # relative: a hose pulled straight between its mounts has no equilibrium to solve for
+
+
+def reaches(length: float, distance: float) -> bool:
+    """Whether a hose of `length` mm spans mounts `distance` mm apart without being pulled straight (False for NaN)."""
+    return distance < length * (1.0 - STRAIGHT_MARGIN)
 
 
 @dataclass(frozen=True)
@@ -20,6 +28,7 @@ class Problem:
         (right-hand rule) applied after the torque-free lock angle.
     gravity: m/s^2 vector (e.g. [0, 0, -9.81]); zero for a weightless study.
     name: free text for reports.
+    clips: intermediate supports (model/clips.py), in order of arc length; each on a station of the hose.
     """
 
     hose: Hose
@@ -28,6 +37,7 @@ class Problem:
     end_twist_deg: float = 0.0
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     name: str = "hose"
+    clips: tuple[Clip, ...] = ()
 
     def __post_init__(self) -> None:
         g = np.asarray(self.gravity, dtype=float).reshape(-1)
@@ -37,8 +47,48 @@ class Problem:
         if not np.isfinite(self.end_twist_deg):
             raise ValueError(f"end.twist = {self.end_twist_deg!r}: must be a finite angle in degrees")
         distance = mount_distance(self.start, self.end)
-        if distance >= self.hose.length * (1.0 - 1e-9):
+        if not reaches(self.hose.length, distance):
             raise ValueError(
                 f"hose.length = {self.hose.length:g} mm is not longer than the mount distance "
                 f"{distance:g} mm: an inextensible hose cannot reach; use a hose longer than {distance:g} mm"
+            )
+        object.__setattr__(self, "clips", tuple(self.clips))
+        self._check_clips()
+
+    def _check_clips(self) -> None:
+        """Each clip strictly inside the hose, on a station, after the previous one, and reachable."""
+        hose = self.hose
+        previous_s, previous_point, previous_label = 0.0, self.start.point, "the start mount"
+        for index, clip in enumerate(self.clips):
+            label = f"clips[{index}]" + (f" ({clip.name})" if clip.name else "")
+            if not previous_s < clip.arc_length < hose.length:
+                raise ValueError(
+                    f"{label}: arc_length = {clip.arc_length:g} mm: must lie between {previous_s:g} mm "
+                    f"({previous_label}) and the hose length {hose.length:g} mm; list clips in order of arc length"
+                )
+            if clip_node(clip.arc_length, hose.length, int(hose.segments)) is None:
+                raise ValueError(off_station_message(label, clip.arc_length, hose.length, int(hose.segments)))
+            self._check_span(label, clip.arc_length - previous_s, previous_label)
+            self._check_reach(label, clip.arc_length - previous_s, previous_point, clip.point, previous_label)
+            previous_s, previous_point, previous_label = clip.arc_length, clip.point, label
+        if self.clips:
+            self._check_span("end mount", hose.length - previous_s, previous_label)
+            self._check_reach("end mount", hose.length - previous_s, previous_point, self.end.point, previous_label)
+
+    def _check_span(self, label: str, span: float, from_label: str) -> None:
+        # one segment between two held stations is a rigid link: it cannot take up any distance
+        segments = span / self.hose.segment_length
+        if segments < 2.0 - 1e-9:
+            raise ValueError(
+                f"{label}: only {segments:.0f} segment of hose from {from_label}: a span between held stations "
+                f"needs at least two; raise hose.segments or move the clip"
+            )
+
+    @staticmethod
+    def _check_reach(label: str, span: float, from_point: np.ndarray, to_point: np.ndarray, from_label: str) -> None:
+        distance = float(np.linalg.norm(to_point - from_point))
+        if not reaches(span, distance):
+            raise ValueError(
+                f"{label}: the {span:g} mm of hose from {from_label} cannot reach {distance:g} mm; move the clip "
+                "point or change its arc_length"
             )

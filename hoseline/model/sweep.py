@@ -6,8 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hoseline.model import limits
 from hoseline.model.motion import BodyMotion, Pose, Stage
-from hoseline.model.problem import Problem
+from hoseline.model.problem import Problem, reaches
 
 DEFAULT_CLEARANCE = 25.4  # mm, one inch: the usual requirement
 
@@ -67,6 +68,50 @@ class SweepProblem:
         for obstacle in self.obstacles:
             if obstacle.body is not None and obstacle.body not in names:
                 raise ValueError(f"obstacle '{obstacle.name}': body = {obstacle.body!r}: no such body")
+        self._within_size_limits()
+        self._hose_reaches_at_every_pose()
+
+    def _within_size_limits(self) -> None:
+        """Refuse a sweep whose result arrays or clearance search would not fit in memory."""
+        segments = self.problem.hose.segments
+        stations = self.pose_count * (segments + 1)
+        if stations > limits.SWEEP_STATIONS:
+            raise ValueError(
+                f"{self.pose_count} poses of a hose of {segments} segments are {stations} stations to compute and "
+                f"store, more than {limits.SWEEP_STATIONS}: use fewer poses (steps, pose table rows) or segments"
+            )
+        triangles = sum(len(obstacle.faces) for obstacle in self.obstacles)
+        if triangles > limits.OBSTACLE_TRIANGLES:
+            raise ValueError(
+                f"the obstacles have {triangles} triangles, more than {limits.OBSTACLE_TRIANGLES}: "
+                "export coarser meshes (a tolerance of 0.1 mm is plenty for clearance)"
+            )
+
+    def _hose_reaches_at_every_pose(self) -> None:
+        """Refuse, before any solving, a pose that moves the mounts as far apart as the hose is long, naming it."""
+        length = self.problem.hose.length
+        starts = self._tips(self.start_body, self.problem.start.point)
+        ends = self._tips(self.end_body, self.problem.end.point)
+        for index, distance in enumerate(np.linalg.norm(ends - starts, axis=1)):
+            if not reaches(length, float(distance)):
+                raise ValueError(
+                    f"at pose {index} ({self.pose_label(index)}) the mounts are {distance:.6g} mm apart and the hose "
+                    f"is {length:g} mm long: it cannot reach; keep the motion within reach or use a hose longer than "
+                    f"{distance:.6g} mm"
+                )
+
+    def _tips(self, body: str | None, point: np.ndarray) -> np.ndarray:
+        """(M, 3) where the fitting tip `point` (mm, design position) is at each pose of `body`."""
+        if body is None:
+            return np.tile(point, (self.pose_count, 1))
+        motion = next(m for m in self.motions if m.name == body)
+        rotations = np.array([pose.rotation for pose in motion.poses])
+        return rotations @ point + np.array([pose.position for pose in motion.poses])
+
+    def pose_label(self, index: int) -> str:
+        """The travel of pose `index` as 'name = value unit', e.g. 'jounce = 20 mm'."""
+        stage = next((s for s in self.stages if s.first <= index < s.first + s.count), Stage("travel", "", 0, 0))
+        return f"{stage.name} = {self.travel[index]:g} {stage.unit}".rstrip()
 
     @property
     def pose_count(self) -> int:

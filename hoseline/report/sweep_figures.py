@@ -1,6 +1,8 @@
 """The interactive figures of the sweep report (plotly): the 3D view with a pose slider, and the plots.
 
-Both are plotly figures; sweep_html.py puts them in one self-contained page.
+Both are plotly figures; sweep_html.py puts them in one self-contained page.  To keep the page
+small, coordinates are sent in single precision (about 1e-4 mm at a metre) and a slider frame
+carries only what changes from pose to pose.
 """
 
 from __future__ import annotations
@@ -44,7 +46,7 @@ def view_figure(result: SweepResult) -> go.Figure:
     figure = go.Figure()
     moving = []  # (trace index, obstacle) of obstacles that move with a body
     for obstacle in sweep.obstacles:
-        x, y, z = obstacle.vertices.T
+        x, y, z = _single(obstacle.vertices).T
         i, j, k = obstacle.faces.T
         figure.add_trace(go.Mesh3d(x=x, y=y, z=z, i=i, j=j, k=k, color=OBSTACLE_COLOUR, opacity=0.45,
                                    name=obstacle.name, showlegend=True, hoverinfo="name", flatshading=True))
@@ -59,14 +61,14 @@ def view_figure(result: SweepResult) -> go.Figure:
         ))
     dynamic_start = len(figure.data)
     first = int(shown_poses(result)[0])
-    for trace in _pose_traces(result, first, moving):
+    for trace in _pose_traces(result, first):
         figure.add_trace(trace)
     dynamic = list(range(dynamic_start, len(figure.data))) + [index for index, _ in moving]
 
     frames, steps = [], []
     for k in shown_poses(result):
         name = str(int(k))
-        frames.append(go.Frame(name=name, data=_pose_traces(result, int(k), moving) + _moved_obstacles(result, int(k), moving),
+        frames.append(go.Frame(name=name, data=_pose_changes(result, int(k)) + _moved_obstacles(result, int(k), moving),
                                traces=dynamic))
         steps.append(dict(method="animate", label=result.travel_label(int(k)),
                           args=[[name], dict(mode="immediate", frame=dict(duration=0, redraw=True), transition=dict(duration=0))]))
@@ -87,69 +89,97 @@ def view_figure(result: SweepResult) -> go.Figure:
     return figure
 
 
-def _pose_traces(result: SweepResult, k: int, moving) -> list:
-    """The traces that change from pose to pose: the hose(s), the mounts, the nearest approaches."""
-    line = result.centerlines[k]
-    traces = [go.Scatter3d(x=line[:, 0], y=line[:, 1], z=line[:, 2], mode="lines", name="hose (both ends clamped)",
-                           line=dict(color=LOCKED_COLOUR, width=9), customdata=result.s,
-                           hovertemplate="s = %{customdata:.1f} mm<extra>hose</extra>")]
+def _pose_traces(result: SweepResult, k: int) -> list:
+    """The traces that change from pose to pose, as shown at pose k: the hose(s), the mounts, the nearest approaches."""
+    traces = [go.Scatter3d(mode="lines", name="hose (both ends clamped)", line=dict(color=LOCKED_COLOUR, width=9),
+                           customdata=_single(result.s), hovertemplate="s = %{customdata:.1f} mm<extra>hose</extra>")]
     if result.free_centerlines is not None:
-        free = result.free_centerlines[k]
-        traces.append(go.Scatter3d(x=free[:, 0], y=free[:, 1], z=free[:, 2], mode="lines",
-                                   name="hose with the end free to spin (common error)",
+        traces.append(go.Scatter3d(mode="lines", name="hose with the end free to spin (common error)",
                                    line=dict(color=FREE_COLOUR, width=3, dash="dash"), hoverinfo="name"))
+    traces.append(go.Scatter3d(mode="lines+markers", name="mounts", line=dict(color="black", width=5),
+                               marker=dict(size=3, color="black"), hoverinfo="name"))
+    traces.extend(go.Scatter3d(mode="lines+markers", showlegend=False, line=dict(width=4), marker=dict(size=3))
+                  for _ in result.clearances)
+    for trace, change in zip(traces, _pose_changes(result, k)):
+        trace.update(change)
+    return traces
+
+
+def _pose_changes(result: SweepResult, k: int) -> list:
+    """What a slider frame sends for pose k, in the order of _pose_traces: coordinates, and the
+    colour and label of each nearest approach."""
+    lines = [result.centerlines[k]] + ([] if result.free_centerlines is None else [result.free_centerlines[k]])
     tips = np.vstack([result.start_points[k], result.end_points[k]])
     ends = tips + MOUNT_ARROW * np.vstack([result.start_directions[k], result.end_directions[k]])
-    arrows = np.vstack([tips[0], ends[0], [np.nan] * 3, tips[1], ends[1]])
-    traces.append(go.Scatter3d(x=arrows[:, 0], y=arrows[:, 1], z=arrows[:, 2], mode="lines+markers", name="mounts",
-                               line=dict(color="black", width=5), marker=dict(size=3, color="black"), hoverinfo="name"))
+    lines.append(np.vstack([tips[0], ends[0], [np.nan] * 3, tips[1], ends[1]]))
+    changes = [go.Scatter3d(x=x, y=y, z=z) for x, y, z in (_single(line).T for line in lines)]
     for clearance in result.clearances:
-        pair = np.vstack([clearance.on_hose[k], clearance.on_obstacle[k]])
+        x, y, z = _single(np.vstack([clearance.on_hose[k], clearance.on_obstacle[k]])).T
         ok = clearance.distance[k] >= clearance.obstacle.clearance
-        traces.append(go.Scatter3d(
-            x=pair[:, 0], y=pair[:, 1], z=pair[:, 2], mode="lines+markers", showlegend=False,
-            line=dict(color=OK_COLOUR if ok else VIOLATION_COLOUR, width=4), marker=dict(size=3),
-            hovertemplate=f"{clearance.obstacle.name}: {clearance.distance[k]:.1f} mm<extra></extra>",
-        ))
-    return traces
+        label = f"{clearance.obstacle.name}: {clearance.distance[k]:.1f} mm<extra></extra>"
+        changes.append(go.Scatter3d(x=x, y=y, z=z, line=dict(color=OK_COLOUR if ok else VIOLATION_COLOUR),
+                                    hovertemplate=label))
+    return changes
+
+
+def _single(values) -> np.ndarray:
+    """Values in single precision, for the page (half the size; 1e-4 mm at a metre is plenty to look at)."""
+    return np.asarray(values, dtype=np.float32)
 
 
 def _moved_obstacles(result: SweepResult, k: int, moving) -> list:
     """The obstacles that move with a body, at pose k (only their vertices change)."""
     traces = []
     for _, obstacle in moving:
-        x, y, z = result.sweep.pose(obstacle.body, k).points(obstacle.vertices).T
+        x, y, z = _single(result.sweep.pose(obstacle.body, k).points(obstacle.vertices)).T
         traces.append(go.Mesh3d(x=x, y=y, z=z))
     return traces
 
 
 def plots_figure(result: SweepResult) -> go.Figure:
-    """Clearance, bend radius, twisting moment, separation and reactions against travel."""
+    """Clearance (if there are obstacles), bend radius, twisting moment, separation (if compared) and
+    reactions against travel."""
     x, label = travel_axis(result)
-    hover = [result.travel_label(k) for k in range(result.pose_count)]
-    panels = ["clearance to the obstacles [mm]", "smallest bend radius (inside) [mm]",
-              "twisting moment [N*mm]", "end free to spin: separation [mm]", "mount reactions [N]"]
+    x = _single(x)
+    labels = [result.travel_label(k) for k in range(result.pose_count)]
+    clearance, bend, twist, separation, reactions = (
+        "clearance to the obstacles [mm]", "smallest bend radius (inside) [mm]", "twisting moment [N*mm]",
+        "end free to spin: separation [mm]", "mount reactions [N]")
+    panels = ([clearance] if result.clearances else []) + [bend, twist] + \
+        ([separation] if result.separation is not None else []) + [reactions]  # no empty panels
     figure = make_subplots(rows=len(panels), cols=1, shared_xaxes=True, subplot_titles=panels, vertical_spacing=0.05)
+    labelled = set()  # rows whose first curve carries the pose names for the hover
 
-    def add(row, y, name, colour=None, dash=None):
-        figure.add_trace(go.Scatter(x=x, y=y, name=name, mode="lines", text=hover, legendgroup=str(row),
-                                    line=dict(color=colour, dash=dash),
-                                    hovertemplate="%{text}: %{y:.4g}<extra>" + name + "</extra>"), row=row, col=1)
+    def add(panel, y, name, colour=None):
+        row = panels.index(panel) + 1
+        trace = go.Scatter(x=x, y=_single(y), name=name, mode="lines", legendgroup=str(row), line=dict(color=colour),
+                           hovertemplate="%{y:.4g}<extra>" + name + "</extra>")
+        if row not in labelled:
+            labelled.add(row)
+            trace.update(text=labels, hovertemplate="%{text}: %{y:.4g}<extra>" + name + "</extra>")
+        figure.add_trace(trace, row=row, col=1)
 
-    for clearance in result.clearances:
-        add(1, clearance.distance, clearance.obstacle.name)
-        add(1, np.full(result.pose_count, clearance.obstacle.clearance), f"required for {clearance.obstacle.name}",
-            VIOLATION_COLOUR, "dash")
-    add(2, result.min_bend_radius, "smallest bend radius")
+    def add_limit(panel, value, name):
+        """A constant as a dashed line from the first to the last pose."""
+        row = panels.index(panel) + 1
+        figure.add_trace(go.Scatter(x=x[[0, -1]], y=[value, value], name=name, mode="lines", legendgroup=str(row),
+                                    line=dict(color=VIOLATION_COLOUR, dash="dash"),
+                                    hovertemplate=f"{value:.4g}<extra>{name}</extra>"), row=row, col=1)
+
+    for near in result.clearances:
+        add(clearance, near.distance, near.obstacle.name)
+    for near in result.clearances:
+        add_limit(clearance, near.obstacle.clearance, f"required for {near.obstacle.name}")
+    add(bend, result.min_bend_radius, "smallest bend radius")
     limit = result.sweep.problem.hose.min_bend_radius
     if limit is not None:
-        add(2, np.full(result.pose_count, limit), "catalogue minimum", VIOLATION_COLOUR, "dash")
-    add(3, result.max_twisting_moment, "largest |twisting moment|")
-    add(3, result.max_differential_torque, "largest |differential torque|")
+        add_limit(bend, limit, "catalogue minimum")
+    add(twist, result.max_twisting_moment, "largest |twisting moment|")
+    add(twist, result.max_differential_torque, "largest |differential torque|")
     if result.separation is not None:
-        add(4, result.separation, "largest distance, clamped vs free to spin", FREE_COLOUR)
-    add(5, np.linalg.norm(result.start_force, axis=1), "start mount force")
-    add(5, np.linalg.norm(result.end_force, axis=1), "end mount force")
+        add(separation, result.separation, "largest distance, clamped vs free to spin", FREE_COLOUR)
+    add(reactions, np.linalg.norm(result.start_force, axis=1), "start mount force")
+    add(reactions, np.linalg.norm(result.end_force, axis=1), "end mount force")
     figure.update_xaxes(title_text=label, row=len(panels), col=1)
-    figure.update_layout(height=1300, margin=dict(l=60, r=20, t=40, b=40), hovermode="x unified")
+    figure.update_layout(height=260 * len(panels), margin=dict(l=60, r=20, t=40, b=40), hovermode="x unified")
     return figure

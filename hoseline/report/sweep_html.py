@@ -2,7 +2,8 @@
 
 Sections: verdict, interactive 3D view with a slider through the poses, plots against
 travel (a marker follows the slider), worst cases, snap-throughs, the free-roll
-comparison, the run's figures, and the input echoed.
+comparison, the run's figures (with the swept envelope's grid), and the input echoed.
+plotly.js is embedded once, compressed (compressed_plotly.py).
 """
 
 from __future__ import annotations
@@ -10,10 +11,9 @@ from __future__ import annotations
 import html
 import math
 
-import plotly.io
-from plotly.offline import get_plotlyjs
-
+from hoseline.procedures.sweep.envelope import Envelope
 from hoseline.procedures.sweep.result import SweepResult
+from hoseline.report.compressed_plotly import figure_div, plotly_loader
 from hoseline.report.sweep_figures import plots_figure, shown_poses, travel_axis, view_figure
 
 VIEW_ID = "view3d"
@@ -26,6 +26,7 @@ table { border-collapse: collapse; } td, th { padding: 0.25em 0.7em; border-bott
 td.number { text-align: right; font-variant-numeric: tabular-nums; }
 .ok { color: #2a9d3c; font-weight: bold; } .bad { color: #d62828; font-weight: bold; }
 pre { background: #f5f5f5; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
+.subtitle { color: #666; margin-top: -0.6em; }
 """
 
 # moves a vertical line on the plots to the pose the 3D view's slider shows
@@ -44,47 +45,64 @@ SLIDER_LINK = """
 })();
 """
 
+VIEW_LEGEND = ("<p>Drag the slider to step through the poses. Blue: the hose with both ends clamped and the twist locked "
+               "at assembly.{free} Green/red lines: the nearest approach to each obstacle (red below the required "
+               "clearance); crosses: the worst approach over the whole sweep.</p>")
+FREE_LEGEND = " Dashed orange: the same hose with its end fitting free to spin (the common modelling error)."
 
-def sweep_report_html(result: SweepResult, input_text: str = "", performance: dict | None = None) -> str:
+
+def sweep_report_html(result: SweepResult, input_text: str = "", performance: dict | None = None,
+                      envelope: Envelope | None = None) -> str:
     """The whole report page as a string.
 
     input_text: the sweep file as read, echoed at the end.  performance: figures of the run
-    (poses per second, ...) from sweep_performance(), shown as a small table.
+    (poses per second, ...) from SweepResult.performance(), shown as a small table.
+    envelope: the swept envelope written beside the report, for its grid and size.
     """
-    sweep = result.sweep
-    view = view_figure(result)
-    plots = plots_figure(result)
+    name = html.escape(result.sweep.problem.name)
     x, _ = travel_axis(result)
     link = SLIDER_LINK % {"view": VIEW_ID, "plots": PLOTS_ID, "xs": [float(x[k]) for k in shown_poses(result)]}
+    free = FREE_LEGEND if result.free_centerlines is not None else ""
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
-        f"<title>hoseline sweep: {html.escape(sweep.problem.name)}</title>",
+        f"<title>{name}: hoseline sweep report</title>",
         f"<style>{STYLE}</style>",
-        f"<script>{get_plotlyjs()}</script>",
         "</head><body>",
-        f"<h1>Sweep of {html.escape(sweep.problem.name)}</h1>",
+        f"<h1>{name}</h1>",
+        '<p class="subtitle">hoseline sweep report</p>',
         _verdict(result),
         "<h2>3D view</h2>",
-        "<p>Drag the slider to step through the poses. Blue: the hose with both ends clamped and the twist locked "
-        "at assembly. Dashed orange: the same hose with its end fitting free to spin (the common modelling error). "
-        "Green/red lines: the nearest approach to each obstacle (red below the required clearance); "
-        "crosses: the worst approach over the whole sweep.</p>",
-        plotly.io.to_html(view, include_plotlyjs=False, full_html=False, div_id=VIEW_ID, auto_play=False),
+        VIEW_LEGEND.format(free=free),
+        figure_div(VIEW_ID, view_figure(result)),
         "<h2>Along the sweep</h2>",
-        plotly.io.to_html(plots, include_plotlyjs=False, full_html=False, div_id=PLOTS_ID),
-        f"<script>{link}</script>",
+        figure_div(PLOTS_ID, plots_figure(result)),
         "<h2>Worst cases</h2>",
         _worst_table(result),
         "<h2>Snap-throughs</h2>",
         _snaps(result),
         "<h2>Run</h2>",
         _performance_table(performance or {}),
+        _envelope_note(envelope, result.sweep.problem.hose.outer_radius),
         "<h2>Input</h2>",
         f"<pre>{html.escape(input_text)}</pre>" if input_text else "<p>(built-in demo: no input file)</p>",
+        plotly_loader([VIEW_ID, PLOTS_ID], link),
         "</body></html>",
     ]
     return "\n".join(parts)
+
+
+def _envelope_note(envelope: Envelope | None, radius: float) -> str:
+    """One paragraph: the envelope's file, its grid and what that means for its accuracy (radius: the hose's, mm)."""
+    if envelope is None:
+        return ""
+    coarsened = "" if not envelope.coarsened else \
+        f" (coarsened from {envelope.requested_cell:.3g} mm to stay within the memory and size budgets)"
+    widened = "" if envelope.radius <= radius else \
+        f"; the hose, thinner than a cell, is meshed {envelope.radius:.3g} mm in radius instead of {radius:.3g} mm"
+    return (f"<p>Swept envelope: <code>envelope.stl</code>, {len(envelope.faces)} triangles on a grid of "
+            f"{envelope.cell:.3g} mm{coarsened}; its surface is within about one cell of the exact union of the "
+            f"hose's tube over the poses{widened}.</p>")
 
 
 def _verdict(result: SweepResult) -> str:

@@ -5,6 +5,7 @@ matplotlib's object interface with the Agg canvas, as plots.py.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -61,33 +62,52 @@ def plot_sweep_view(result: SweepResult, path_png: str | Path) -> Path:
 
 
 def plot_sweep_curves(result: SweepResult, path_png: str | Path) -> Path:
-    """Clearance, smallest bend radius, twisting moment and the free-roll separation against travel."""
+    """Clearance (if there are obstacles), smallest bend radius, twisting moment and the free-roll
+    separation (if compared) against travel."""
     x, label = travel_axis(result)
-    figure = Figure(figsize=(14, 9), layout="constrained")
+    shown = ((_clearance_panel, bool(result.clearances)), (_bend_panel, True), (_twist_panel, True),
+             (_separation_panel, result.separation is not None))
+    drawn = [panel for panel, drawing in shown if drawing]
+    figure = Figure(figsize=(14, 4.5 * math.ceil(len(drawn) / 2)), layout="constrained")
     FigureCanvasAgg(figure)
-    panels = figure.subplots(2, 2, sharex=True).ravel()
-    for clearance in result.clearances:
-        line = panels[0].plot(x, clearance.distance, label=clearance.obstacle.name)[0]
-        panels[0].axhline(clearance.obstacle.clearance, color=line.get_color(), linestyle="--", linewidth=0.8)
-    panels[0].set(title="clearance (dashed: required)", ylabel="mm")
-    panels[1].plot(x, result.min_bend_radius, label="smallest bend radius (inside)")
-    if result.sweep.problem.hose.min_bend_radius is not None:
-        panels[1].axhline(result.sweep.problem.hose.min_bend_radius, color=VIOLATION_COLOUR, linestyle="--",
-                          label="catalogue minimum")
-    panels[1].set(title="bend radius", ylabel="mm")
-    panels[2].plot(x, result.max_twisting_moment, label="largest |twisting moment|")
-    panels[2].plot(x, result.max_differential_torque, label="largest |differential torque|")
-    panels[2].set(title="twisting moment", ylabel="N*mm")
-    if result.separation is not None:
-        panels[3].plot(x, result.separation, color=FREE_COLOUR, label="clamped vs end free to spin")
-    panels[3].set(title="separation of the free-roll answer", ylabel="mm")
-    for axes in panels:
+    panels = figure.subplots(math.ceil(len(drawn) / 2), 2, sharex=True, squeeze=False).ravel()
+    for axes, draw in zip(panels, drawn):
+        draw(axes, result, x)
         axes.grid(True, alpha=0.3)
         if axes.lines:
             axes.legend()
-    for axes in panels[2:]:
+    for axes in panels[len(drawn):]:  # no empty panel
+        axes.remove()
+    for axes in panels[:len(drawn)][-2:]:
         axes.set_xlabel(label)
+        axes.xaxis.set_tick_params(labelbottom=True)
     return write_bytes(path_png, png_bytes(figure))
+
+
+def _clearance_panel(axes, result: SweepResult, x: np.ndarray) -> None:
+    for clearance in result.clearances:
+        line = axes.plot(x, clearance.distance, label=clearance.obstacle.name)[0]
+        axes.axhline(clearance.obstacle.clearance, color=line.get_color(), linestyle="--", linewidth=0.8)
+    axes.set(title="clearance (dashed: required)", ylabel="mm")
+
+
+def _bend_panel(axes, result: SweepResult, x: np.ndarray) -> None:
+    axes.plot(x, result.min_bend_radius, label="smallest bend radius (inside)")
+    if result.sweep.problem.hose.min_bend_radius is not None:
+        axes.axhline(result.sweep.problem.hose.min_bend_radius, color=VIOLATION_COLOUR, linestyle="--",
+                     label="catalogue minimum")
+    axes.set(title="bend radius", ylabel="mm")
+
+
+def _twist_panel(axes, result: SweepResult, x: np.ndarray) -> None:
+    axes.plot(x, result.max_twisting_moment, label="largest |twisting moment|")
+    axes.plot(x, result.max_differential_torque, label="largest |differential torque|")
+    axes.set(title="twisting moment", ylabel="N*mm")
+
+
+def _separation_panel(axes, result: SweepResult, x: np.ndarray) -> None:
+    axes.plot(x, result.separation, color=FREE_COLOUR, label="clamped vs end free to spin")
+    axes.set(title="separation of the free-roll answer", ylabel="mm")
 
 
 def _worst_pose(result: SweepResult) -> int:

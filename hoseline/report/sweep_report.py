@@ -5,6 +5,7 @@
     curves.png    clearance, bend radius, twisting moment, free-roll separation against travel
     envelope.stl  the swept envelope of the hose (mm), for packaging studies
     poses.csv, shapes.csv, sweep.json   the numbers (io/sweep_results.py)
+    obstacle_<name>.stl   each obstacle made in code (the demo's strut), as the clearance was measured
 """
 
 from __future__ import annotations
@@ -12,7 +13,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from hoseline.io.atomic import staged_directory, write_text
-from hoseline.io.obstacle_mesh import write_stl
 from hoseline.io.sweep_results import write_sweep_data
 from hoseline.procedures.sweep.envelope import swept_envelope
 from hoseline.procedures.sweep.result import SweepResult
@@ -23,16 +23,16 @@ SWEEP_FILES = ("report.html", "view.png", "curves.png", "envelope.stl", "poses.c
 
 
 def write_sweep_report(result: SweepResult, out_dir: str | Path, input_text: str = "") -> Path:
-    """Write the files of SWEEP_FILES into `out_dir` (created); on any failure nothing is written.
+    """Write the files of SWEEP_FILES (and the obstacles made in code) into `out_dir` (created);
+    on any failure nothing is written.
 
     input_text: the sweep file as read, echoed in the report.  Returns out_dir.
     """
     out_dir = Path(out_dir)
+    envelope = swept_envelope(result.centerlines, result.sweep.problem.hose.outer_radius)
     with staged_directory(out_dir) as staging:
-        write_text(staging / "report.html", sweep_report_html(result, input_text, result.performance()))
+        write_text(staging / "report.html", sweep_report_html(result, input_text, result.performance(), envelope))
         plot_sweep_view(result, staging / "view.png")
         plot_sweep_curves(result, staging / "curves.png")
-        vertices, faces = swept_envelope(result.centerlines, result.sweep.problem.hose.outer_radius)
-        write_stl(staging / "envelope.stl", vertices, faces)
-        write_sweep_data(result, staging)
+        write_sweep_data(result, staging, envelope)
     return out_dir

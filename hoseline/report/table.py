@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
+import numpy as np
 from rich.table import Table
 
 from hoseline.procedures.placement.result import Result
@@ -62,4 +63,10 @@ def summary_table(results: Sequence[Result], labels: Sequence[str], title: str =
         table.add_column(label, justify="right")
     for name, unit, read in ROWS:
         table.add_row(name, unit, *(read(result) for result in results))
+    for index in range(max((len(result.clips) for result in results), default=0)):  # per clip: its load on the hose
+        clips = [result.clips[index] if index < len(result.clips) else None for result in results]
+        table.add_row(f"clip {index + 1} force", "N",
+                      *("" if clip is None else f"{_number(float(np.linalg.norm(clip.force)))} ({clip.kind})" for clip in clips))
+        table.add_row(f"clip {index + 1} moment", "N*mm",
+                      *("" if clip is None else _number(float(np.linalg.norm(clip.moment))) for clip in clips))
     return table

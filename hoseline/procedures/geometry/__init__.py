@@ -6,3 +6,7 @@ mesh for every segment.  Used by sweeps now, and by contact.
 
 May import: numpy, numba only (no model, no mechanics): pure geometry in mm.
 """
+
+from hoseline import compilation
+
+compilation.install()  # Numba's cache of these kernels: hoseline/compilation.py

@@ -163,6 +163,41 @@ def _box_gap(p, q, lower, upper):
     return max(math.sqrt(boxes), math.sqrt(ball) - 0.5 * math.sqrt(half))
 
 
+@njit(cache=True, inline="always")
+def segment_search(p, q, bound, triangles, normals, lower, upper, children, ranges, stack):
+    """Branch and bound over the tree for the segment pq, looking for something nearer than `bound` (mm).
+
+    stack: scratch space of STACK_SIZE ints.  Returns (distance, position, on_segment, on_triangle):
+    the centreline distance and the triangle's position in tree order when one is nearer than
+    `bound`; else (bound, -1, p, p).
+    """
+    best, best_position, on_segment, on_triangle = bound, -1, p, p
+    stack[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if _box_gap(p, q, lower[node], upper[node]) >= best:
+            continue
+        if children[node, 0] < 0:
+            first, count = ranges[node, 0], ranges[node, 1]
+            for position in range(first, first + count):
+                a, b, c = _corners(triangles, position)
+                if segment_plane_gap(p, q, a, _point(normals, position)) >= best:
+                    continue
+                d, x, y = segment_triangle_distance(p, q, a, b, c)
+                if d < best:
+                    best, best_position, on_segment, on_triangle = d, position, x, y
+            continue
+        left, right = children[node, 0], children[node, 1]
+        if _box_gap(p, q, lower[left], upper[left]) <= _box_gap(p, q, lower[right], upper[right]):
+            stack[top], stack[top + 1] = right, left  # the nearer child is opened first
+        else:
+            stack[top], stack[top + 1] = left, right
+        top += 2
+    return best, best_position, on_segment, on_triangle
+
+
 @njit(cache=True)
 def _nearest(nodes, triangles, normals, lower, upper, children, ranges, hint):
     """Branch and bound over the tree for every segment of the chain `nodes`.
@@ -186,28 +221,9 @@ def _nearest(nodes, triangles, normals, lower, upper, children, ranges, hint):
     stack = np.empty(STACK_SIZE, dtype=np.int64)
     for k in range(n_seg):
         i = (start + k) % n_seg  # begin where the hose was nearest: tightens the bound early
-        p, q = _point(nodes, i), _point(nodes, i + 1)
-        stack[0] = 0
-        top = 1
-        while top > 0:
-            top -= 1
-            node = stack[top]
-            if _box_gap(p, q, lower[node], upper[node]) >= best:
-                continue
-            if children[node, 0] < 0:
-                first, count = ranges[node, 0], ranges[node, 1]
-                for position in range(first, first + count):
-                    a, b, c = _corners(triangles, position)
-                    if segment_plane_gap(p, q, a, _point(normals, position)) >= best:
-                        continue
-                    d, x, y = segment_triangle_distance(p, q, a, b, c)
-                    if d < best:
-                        best, best_segment, best_position, on_hose, on_obstacle = d, i, position, x, y
-                continue
-            left, right = children[node, 0], children[node, 1]
-            if _box_gap(p, q, lower[left], upper[left]) <= _box_gap(p, q, lower[right], upper[right]):
-                stack[top], stack[top + 1] = right, left  # the nearer child is opened first
-            else:
-                stack[top], stack[top + 1] = left, right
-            top += 2
+        d, position, x, y = segment_search(
+            _point(nodes, i), _point(nodes, i + 1), best, triangles, normals, lower, upper, children, ranges, stack
+        )
+        if d < best:
+            best, best_segment, best_position, on_hose, on_obstacle = d, i, position, x, y
     return best, best_segment, on_hose, on_obstacle, best_position

@@ -10,7 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hoseline.mechanics.clipped import joint_darboux, joint_into
+from hoseline.mechanics.clipped_newton import clip_arrays
 from hoseline.mechanics.energy import joint_moments
+from hoseline.mechanics.stiffeners import HALF
 from hoseline.mechanics.newton import RodProperties, end_frame_of
 from hoseline.mechanics.rod import Clamps, RodState
 
@@ -43,7 +46,22 @@ def station_moments(props: RodProperties, clamps: Clamps, state: RodState):
     tangents = np.vstack([clamps.start_frame[2][None], state.frames[:, 2], end_frame[2][None]])
     node_tangent = tangents[:-1] + tangents[1:]
     node_tangent /= np.linalg.norm(node_tangent, axis=1)[:, None]
+    if clamps.clips:  # at a clip that holds the direction: the half joint from the clip frame on
+        _clip_station_moments(props, clamps, state, moments, darboux)
     return moments, darboux, node_tangent
+
+
+def _clip_station_moments(props: RodProperties, clamps: Clamps, state: RodState, moments, darboux) -> None:
+    # the hose beyond a clip station hangs on the clip frame through a half joint: its moment on the
+    # part before the station and its Darboux vector replace those of the (absent) full joint
+    nodes, _, frames, framed, _ = clip_arrays(clamps, state)
+    g, haa, hab = np.empty(3), np.empty((3, 3)), np.empty((3, 3))
+    half = 0.5 * props.segment_length
+    for node, frame, has_frame in zip(nodes, frames, framed):
+        if has_frame:
+            joint_into(frame, state.frames[node], props.stiffness, half, props.springs, HALF, g, haa, hab)
+            moments[node] = -g
+            darboux[node] = joint_darboux(frame, state.frames[node], half)
 
 
 def hose_health(props: RodProperties, clamps: Clamps, state: RodState, outer_radius: float) -> Health:

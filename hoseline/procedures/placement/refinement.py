@@ -27,6 +27,9 @@ def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress |
     """
     if not (math.isfinite(accuracy) and accuracy > 0.0):
         raise ValueError(f"accuracy {accuracy!r} mm: give a positive number of mm")
+    if problem.clips:  # the segment counts below would move the clips off the stations
+        raise PlacementError("a hose with clips cannot be refined to an accuracy yet: give hose.segments (the result "
+                             "reports its estimated discretisation error)")
     segments = int(problem.hose.segments)
     tried: dict[int, Result] = {}
     for _ in range(ROUNDS):

@@ -47,6 +47,26 @@ class OtherEquilibrium:
                 "lock_angle_deg": self.lock_angle_deg, "same_clamps": self.same_clamps}
 
 
+@dataclass(frozen=True)
+class ClipReaction:
+    """What one clip does to the hose: kind and name (as in the problem), arc_length (mm from the
+    start fitting), point (3,) mm, force (3,) N and moment (3,) N*mm about the clip point, both the
+    clip's on the hose (world axes).  A rotating clip's moment has no component along its axis
+    (the hose rolls freely in it); a ball clip carries a force only."""
+
+    kind: str
+    name: str
+    arc_length: float
+    point: np.ndarray
+    force: np.ndarray
+    moment: np.ndarray
+
+    def summary(self) -> dict:
+        """For result.json (user units)."""
+        return {"type": self.kind, "name": self.name, "arc_length_mm": self.arc_length, "point_mm": self.point.tolist(),
+                "force_N": self.force.tolist(), "moment_Nmm": self.moment.tolist()}
+
+
 @dataclass
 class Result:
     """Static equilibrium of a hose placed between two mounts.
@@ -88,6 +108,7 @@ class Result:
     alternatives: the other stable equilibria as Results, when asked for.
     discretisation_error: estimated largest station error from the segment count, mm (Richardson
         extrapolation from one solve with half the segments); None if not estimated.
+    clips: the load of every clip on the hose (ClipReaction), in the order of problem.clips.
     events: human-readable log of what happened along the continuation (bifurcations, branch switches).
     residual: final relative residual of the force and moment balance.
     """
@@ -126,6 +147,7 @@ class Result:
     alternatives: list["Result"] = field(default_factory=list)
     events: list[str] = field(default_factory=list)
     discretisation_error: float | None = None
+    clips: list[ClipReaction] = field(default_factory=list)
 
     @property
     def stable(self) -> bool:
@@ -138,7 +160,8 @@ class Result:
         return float(np.max(np.abs(self.twisting_moment)))
 
     def summary(self) -> dict:
-        """Scalars for reports and result.json (user units)."""
+        """Scalars for reports and result.json (user units); "clips" only when the problem has clips."""
+        clips = {"clips": [clip.summary() for clip in self.clips]} if self.clips else {}
         return {
             "name": self.problem.name,
             "length_mm": self.problem.hose.length,
@@ -168,4 +191,4 @@ class Result:
             "continuation_steps": self.steps,
             "wall_time_s": self.wall_time,
             "events": list(self.events),
-        }
+        } | clips

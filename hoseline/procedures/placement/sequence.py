@@ -24,10 +24,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from hoseline.mechanics.clipped_newton import clip_rolls
 from hoseline.mechanics.newton import RodProperties, end_frame_of, solve_equilibrium, total_energy
-from hoseline.mechanics.rod import Clamps, RodState
+from hoseline.mechanics.rod import Clamps, ClipHold, RodState
 from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rotate_frames, rotation_matrix, rotation_vector
 from hoseline.mechanics.stiffeners import spring_set
+from hoseline.model.clips import clip_node
 from hoseline.model.hose import MIN_SEGMENTS, Hose
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.continuation import (
@@ -80,14 +82,20 @@ def placement_rotation(problem: Problem) -> tuple[np.ndarray, float]:
     is normal to the plane of the start tangent and the mount-to-mount vector (so the
     tangent turns towards the end mount), or any normal if that plane is not defined.
     """
-    t0 = problem.start.direction
-    t1 = -problem.end.direction
+    return tangent_turn(problem.start.direction, -problem.end.direction, problem.end.point - problem.start.point,
+                        problem.hose.length)
+
+
+def tangent_turn(t0: np.ndarray, t1: np.ndarray, chord: np.ndarray, length: float) -> tuple[np.ndarray, float]:
+    """Axis (unit) and angle (rad) turning the unit tangent t0 into t1: about t0 x t1, or for parallel
+    tangents about the normal of the plane of t0 and `chord` (mm; the hose of `length` mm turns
+    towards it), or any normal if that plane is not defined."""
     cross = np.cross(t0, t1)
     angle = math.atan2(float(np.linalg.norm(cross)), float(np.dot(t0, t1)))
     if np.linalg.norm(cross) > 1e-9:
         return cross / np.linalg.norm(cross), angle
-    toward = np.cross(t0, problem.end.point - problem.start.point)
-    if np.linalg.norm(toward) > 1e-9 * problem.hose.length:
+    toward = np.cross(t0, chord)
+    if np.linalg.norm(toward) > 1e-9 * length:
         return toward / np.linalg.norm(toward), angle
     return perpendicular(t0), angle
 
@@ -98,6 +106,12 @@ class PlacementPath:
     place(t): t in [0, 1] carries the end of the straight hose onto the end mount (roll free,
     weight ramped in).  twisted(locked_frame, twist_deg): the end fitting at the end mount,
     turned by twist_deg degrees about end.direction from the locked frame (roll clamped).
+
+    Clips: in the place phase every clip's station travels along a straight line from where it
+    sits on the straight hose to the clip point, and a clip that holds the direction turns its
+    frame from the start frame into the clip direction (about their cross product), roll free.
+    After the place phase the roll of fixed clips is locked at the torque-free angle found
+    (locked_clips); rotating clips stay free to roll.
     """
 
     def __init__(self, problem: Problem):
@@ -106,20 +120,52 @@ class PlacementPath:
         self.straight_end = problem.start.point + problem.hose.length * problem.start.direction
         self.axis, self.angle = placement_rotation(problem)
         self.weight = weight_vector(problem)
+        hose, start = problem.hose, problem.start
+        self.clip_nodes = [clip_node(clip.arc_length, hose.length, int(hose.segments)) for clip in problem.clips]
+        self.clip_turns = [
+            tangent_turn(start.direction, clip.direction, clip.point - start.point, hose.length) if clip.holds_direction
+            else None
+            for clip in problem.clips
+        ]
 
     def place(self, t: float) -> Clamps:
         """Clamps at fraction t of the place phase."""
+        start = self.problem.start
+        clips = tuple(
+            ClipHold(
+                node,
+                (1.0 - t) * (start.point + clip.arc_length * start.direction) + t * clip.point,
+                None if turn is None else self.start_frame @ rotation_matrix(turn[0] * (turn[1] * t)).T,
+                turn is not None,
+            )
+            for clip, node, turn in zip(self.problem.clips, self.clip_nodes, self.clip_turns)
+        )
         return Clamps(
-            start_point=self.problem.start.point,
+            start_point=start.point,
             start_frame=self.start_frame,
             end_point=(1.0 - t) * self.straight_end + t * self.problem.end.point,
             end_frame=self.start_frame @ rotation_matrix(self.axis * (self.angle * t)).T,
             roll_free=True,
             line_weight=t * self.weight,
+            clips=clips,
         )
 
-    def twisted(self, locked_frame: np.ndarray, twist_deg: float) -> Clamps:
-        """Clamps with the end fitting turned by twist_deg (degrees) from locked_frame."""
+    def locked_clips(self, state: RodState) -> tuple[tuple[ClipHold, ...], np.ndarray]:
+        """The clips at the end of the place phase with the roll of fixed clips locked at the
+        torque-free angle of `state`, and the clip rolls (rad) that stay free (zero where locked)."""
+        placed = self.place(1.0)
+        rolls = clip_rolls(placed, state)
+        clips, free_rolls = [], np.zeros(len(rolls))
+        for j, (clip, hold) in enumerate(zip(self.problem.clips, placed.clips)):
+            if clip.kind == "fixed":
+                hold = replace(hold, frame=hold.frame @ rotation_matrix(rolls[j] * hold.frame[2]).T, roll_free=False)
+            elif hold.roll_free:
+                free_rolls[j] = rolls[j]
+            clips.append(hold)
+        return tuple(clips), free_rolls
+
+    def twisted(self, locked_frame: np.ndarray, twist_deg: float, clips: tuple[ClipHold, ...] = ()) -> Clamps:
+        """Clamps with the end fitting turned by twist_deg (degrees) from locked_frame; clips as locked."""
         return Clamps(
             start_point=self.problem.start.point,
             start_frame=self.start_frame,
@@ -127,6 +173,7 @@ class PlacementPath:
             end_frame=locked_frame @ rotation_matrix(self.problem.end.direction * math.radians(twist_deg)).T,
             roll_free=False,
             line_weight=self.weight,
+            clips=clips,
         )
 
 
@@ -154,7 +201,10 @@ def solve(
 
     result = build_result(problem, props, final, state, lock_angle_deg, log, started, residual)
     others = fork_branches(props, final, state, log.forks, sequence.finish)
-    others += symmetric_images(problem, props, final, state, lock_angle_deg)
+    if problem.clips:  # the symmetry search knows the mounts only
+        result.events.append("uniqueness: the symmetry images were not searched (the problem has clips)")
+    else:
+        others += symmetric_images(problem, props, final, state, lock_angle_deg)
     others = judge_uniqueness(result, props, final, state, others, log.forks)
     if alternatives:
         result.alternatives = [
@@ -162,8 +212,15 @@ def solve(
             for other in others
         ]
     if estimate_error:
-        coarse = replace(problem, hose=replace(problem.hose, segments=coarse_segments(props.segments, MIN_SEGMENTS)))
-        result.discretisation_error = richardson_error(props, rod_properties(coarse), final, state, control.tolerance)
+        coarse_count = coarse_segments(props.segments, MIN_SEGMENTS)
+        coarse_final = _coarse_clamps(final, state, props.segments, coarse_count)
+        if coarse_final is None:
+            result.events.append(f"accuracy: the discretisation error is not estimated: a clip is not on a station of "
+                                 f"the {coarse_count}-segment hose of the coarse solve (use an even station count)")
+        else:
+            coarse = replace(problem, hose=replace(problem.hose, segments=coarse_count))
+            result.discretisation_error = richardson_error(props, rod_properties(coarse), coarse_final, state,
+                                                           control.tolerance)
     result.wall_time = time.perf_counter() - started
     return result
 
@@ -177,6 +234,7 @@ class _Sequence:
         self.path = PlacementPath(problem)
         self.place_props = replace(props, springs=None)  # stiffener springs come in once placed (stiffening.py)
         self.locked_frame: np.ndarray | None = None  # of the main run, for forks met while twisting
+        self.locked_clips: tuple[ClipHold, ...] = ()
         self.lock_angle_deg = 0.0
 
     def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState):
@@ -190,16 +248,18 @@ class _Sequence:
                 state = phase_in_springs(props, place_path(1.0), state, log, self.progress)
             locked_frame = end_frame_of(place_path(1.0), state)
             lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))
-            state, fraction = RodState(state.frames, state.end_force, 0.0), 0.0
+            locked_clips, free_rolls = self.path.locked_clips(state)
+            state = RodState(state.frames, state.end_force, 0.0, state.clip_forces, free_rolls)
+            fraction = 0.0
             if self.locked_frame is None:
-                self.locked_frame, self.lock_angle_deg = locked_frame, lock_angle_deg
+                self.locked_frame, self.lock_angle_deg, self.locked_clips = locked_frame, lock_angle_deg, locked_clips
         elif phase == "twist":
-            locked_frame, lock_angle_deg = self.locked_frame, self.lock_angle_deg
+            locked_frame, lock_angle_deg, locked_clips = self.locked_frame, self.lock_angle_deg, self.locked_clips
         else:
             raise ValueError(f"the placement cannot be resumed in phase {phase!r}")
 
         def twist_path(t: float) -> Clamps:
-            return self.path.twisted(locked_frame, problem.end_twist_deg * t)
+            return self.path.twisted(locked_frame, problem.end_twist_deg * t, locked_clips)
 
         twist = math.radians(problem.end_twist_deg)
         if twist != 0.0 and fraction < 1.0:
@@ -243,6 +303,8 @@ def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.
 
     def candidate(bend_axis: np.ndarray) -> RodState:
         # start frame, bent by the mode about bend_axis, then turned by the spread end rotation
+        if clamps.clips:
+            return RodState(_span_buckles(props, clamps, bend_axis), np.zeros(3), 0.0)
         straight = np.repeat(clamps.start_frame[None], props.segments, axis=0)
         frames = rotate_frames(rotate_frames(straight, np.outer(slope, bend_axis)), ramp)
         return RodState(frames, np.zeros(3), 0.0)
@@ -266,6 +328,47 @@ def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.
         f"placement phase 'place' failed at fraction {fraction:g}: no stable buckled shape was found for the "
         "first step from the straight hose"
     )
+
+
+def _coarse_clamps(final: Clamps, state: RodState, segments: int, coarse_segments: int) -> Clamps | None:
+    """The final clamps for the coarse solve of the error estimate: the clips on the coarse
+    stations, rotating clips turned by the roll they found (so the coarse solve starts from zero
+    roll); None if a clip falls between coarse stations."""
+    if not final.clips:
+        return final
+    if 2 * coarse_segments != segments or any(clip.node % 2 for clip in final.clips):
+        return None
+    rolls = clip_rolls(final, state)
+    clips = tuple(
+        replace(clip, node=clip.node // 2,
+                frame=clip.frame if not clip.roll_free else clip.frame @ rotation_matrix(roll * clip.frame[2]).T)
+        for clip, roll in zip(final.clips, rolls)
+    )
+    return replace(final, clips=clips)
+
+
+def _span_buckles(props: RodProperties, clamps: Clamps, bend_axis: np.ndarray) -> np.ndarray:
+    """Segment frames (N, 3, 3) of a hose whose every span between held stations (start, clips,
+    end) runs along its chord, buckled by the clamped-clamped mode about bend_axis (made normal
+    to the chord) with the amplitude that takes up the span's chord shortening."""
+    h = props.segment_length
+    held = [(0, clamps.start_point)] + [(clip.node, clip.point) for clip in clamps.clips]
+    held.append((props.segments, clamps.end_point))
+    frames = np.empty((props.segments, 3, 3))
+    for (first, point_a), (last, point_b) in zip(held[:-1], held[1:]):
+        span = (last - first) * h
+        chord_vector = point_b - point_a
+        chord = float(np.linalg.norm(chord_vector))
+        along = chord_vector / chord if chord > 1e-12 * span else clamps.start_frame[2]
+        turn_axis, turn_angle = tangent_turn(clamps.start_frame[2], along, along, span)
+        base = clamps.start_frame @ rotation_matrix(turn_axis * turn_angle).T
+        normal = bend_axis - (bend_axis @ along) * along
+        normal = normal / np.linalg.norm(normal) if np.linalg.norm(normal) > 1e-9 else perpendicular(along)
+        amplitude = 2.0 * math.sqrt(span * max(span - chord, 1e-6 * span)) / math.pi
+        s_mid = (np.arange(last - first) + 0.5) * h
+        slope = amplitude * math.pi / span * np.sin(2.0 * math.pi * s_mid / span)
+        frames[first:last] = rotate_frames(np.repeat(base[None], last - first, axis=0), np.outer(slope, normal))
+    return frames
 
 
 def _rotation_vector_between(frame_a: np.ndarray, frame_b: np.ndarray) -> np.ndarray:

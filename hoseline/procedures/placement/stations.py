@@ -7,6 +7,7 @@ import time
 
 import numpy as np
 
+from hoseline.mechanics import clipped_newton
 from hoseline.mechanics.energy import elastic_energy
 from hoseline.mechanics.newton import RodProperties, evaluate
 from hoseline.mechanics.rod import Clamps, RodState, centerline, gravity_energy
@@ -14,7 +15,7 @@ from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model.mounts import single_plane_offset
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.hose_health import station_moments
-from hoseline.procedures.placement.result import Result
+from hoseline.procedures.placement.result import ClipReaction, Result
 
 NEUTRAL_MARGIN = 1e-6  # margins below this fraction of EI/L^2 are rounding of an exact zero
 
@@ -43,7 +44,9 @@ def build_result(
     bending = np.linalg.norm(moments - twisting[:, None] * node_tangent, axis=1)
     curvature = np.hypot(darboux[:, 0], darboux[:, 1])
     internal_force = state.end_force[None, :] + (props.length - s)[:, None] * clamps.line_weight[None, :]
-
+    clips = clip_reactions(problem, props, clamps, state)
+    for clip in clips:  # the clips beyond a station hold the part beyond it too
+        internal_force[s < clip.arc_length - 0.5 * h] += clip.force
     system = evaluate(props, clamps, state)
     values, _ = smallest_eigenpairs(system.band, system.jac_t, count=1)
     margin = float(values[0]) / h  # per unit length: independent of the segment count
@@ -76,7 +79,8 @@ def build_result(
         end_force=state.end_force.copy(),
         end_moment=moments[-1].copy(),
         elastic_energy=float(
-            elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs)
+            system.energy - gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h) if clips
+            else elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs)
         ),
         gravity_energy=gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h),
         stability_margin=margin,
@@ -90,4 +94,16 @@ def build_result(
         wall_time=time.perf_counter() - started,
         residual=residual,
         events=events,
+        clips=clips,
     )
+
+
+def clip_reactions(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState) -> list[ClipReaction]:
+    """The force (N) and moment (N*mm) of every clip on the hose at an equilibrium `state`."""
+    if not clamps.clips:
+        return []
+    forces, moments = clipped_newton.clip_reactions(props, clamps, state)
+    return [
+        ClipReaction(clip.kind, clip.name, clip.arc_length, clip.point.copy(), force, moment)
+        for clip, force, moment in zip(problem.clips, forces, moments)
+    ]

@@ -59,6 +59,8 @@ def follow_twist(problem: Problem, twists_deg: np.ndarray, label: str) -> TwistP
 
     A twist step that cannot be followed ends the path there (TwistPath.failure says why).
     """
+    if problem.clips:  # the twisted clamps below hold the two fittings only
+        raise ValueError("a twist path of a problem with clips is not supported yet")
     twists_deg = np.asarray(twists_deg, dtype=float)
     placed = solve(replace(problem, end_twist_deg=0.0))
     props = rod_properties(problem)

@@ -2,8 +2,12 @@
 
 The thesis fitted a few short cylinders by hand; this does it along the whole scan:
 
-1. Isolated outliers are dropped (mean distance to the nearest neighbours far above the
-   typical one).
+0. The cloud is reduced to a voxel grid of a tenth of the radius (voxel_cloud.py): the
+   centroid of each occupied voxel, weighted by its point count, stands for its points, so a
+   scan of millions of points costs about what one of 10^5 does.  Steps 1-3 and the first
+   pass of step 4 only locate the hose and use a coarser grid (a quarter of the radius).
+1. Isolated outliers are dropped (on the coarse grid: mean distance to the nearest
+   neighbours far above the typical one).
 2. Each surface point's normal (local principal axes) and the nominal radius give two
    candidate axis points, p +- r n; the one in the denser crowd of candidates is kept (true
    axis points gather on a curve, wrong ones spread over a tube of twice the radius), which
@@ -11,33 +15,44 @@ The thesis fitted a few short cylinders by hand; this does it along the whole sc
 3. The axis points are ordered along the hose by the longest path of their minimum
    spanning tree (gaps in the scan are bridged by its shortest edge across).
 4. Along that guide, every `spacing` mm, the surface points within half a `section` of the
-   station are fitted with a cylinder whose axis may bend (axis point, direction, curvature,
-   radius) by robust least squares (soft-L1 loss, so remaining outliers count little).  Where the scan covers less
-   than MIN_ARC_FOR_RADIUS_DEG of the circumference, the radius is fixed at the median of
-   the well-covered sections and only the axis is fitted.  Stretches of the guide longer
-   than a radius on which no point projects are reported as gaps and get no station;
-   neither do stations with too few points or points on one side only (the ends).
-5. The guide is rebuilt from the fitted axis and the cylinders fitted once more.
+   station are fitted with a cylinder whose axis may bend (cylinder_fit.py: axis point,
+   direction, curvature, radius; robust least squares, so remaining outliers count little).
+   Where the scan covers less than MIN_ARC_FOR_RADIUS_DEG of the circumference, the radius
+   is fixed at the median of the well-covered sections and only the axis is fitted.
+   Stretches of the guide longer than a radius on which no point projects are reported as
+   gaps and get no station; neither do stations with too few points or points on one side
+   only (the ends).
+5. The guide is rebuilt along the fitted axis (a smoothing spline through the first pass'
+   stations, continued a spacing beyond both ends), its stations placed whole spacings from
+   the start hint, and the cylinders fitted once more.  So the stations lie where the hose
+   is, not where the scan's points happen to end or the first pass happened to start.
 
 The station of each cylinder is the point of its axis in the station's cross-section (the
 thesis' "midpoint of the axis of the cylinder").  Units: mm.
-"""
 
+The voxel grid moves the answer by about 0.001 mm against fits to every point (stations 0.0008 mm,
+deviations 0.0002 mm at 1 and 5 million points: tests/test_large_scans.py, bench/bench_scans.py).
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares
+from scipy.interpolate import make_smoothing_spline
 from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 from scipy.spatial import cKDTree, distance_matrix
+from threadpoolctl import threadpool_limits
 
+from hoseline.procedures.scans.cylinder_fit import fit_cylinder
 from hoseline.procedures.scans.deviation import closest_on_polyline
+from hoseline.procedures.scans.voxel_cloud import VoxelCloud, voxel_cloud
 
-MIN_ARC_FOR_RADIUS_DEG = 120.0  # below this coverage the radius and the axis cannot be told apart
 MIN_SECTION_POINTS = 25
 NEIGHBOURS = 16
 GUIDE_POINTS = 1500  # the spanning tree is built on at most this many axis points
+VOXELS_PER_RADIUS = 10  # default voxel edge: a tenth of the radius
+GUIDE_VOXELS_PER_RADIUS = 4  # the guide and the first pass of fits use a coarser grid: a quarter of the radius
+CHUNK = 200_000  # points per block in the neighbour computations (bounds their memory)
 
 
 @dataclass
@@ -49,7 +64,8 @@ class CenterlineFit:
     s: (m,) arc length along the fitted centreline.
     radius: (m,) fitted radius per section; radius_fitted: False where it was fixed (low coverage).
     coverage_deg: (m,) arc of the circumference the section's points cover.
-    point_count: (m,) surface points per section.  rms: (m,) fit residual per section.
+    point_count: (m,) surface points per section.  rms: (m,) fit residual per section (of the
+    voxel centroids: the scanner's noise within a voxel is averaged out).
     gaps: (from, to) arc-length ranges along the guide with no scan points (longer than a radius).
     outliers: points dropped as isolated.
     """
@@ -85,6 +101,8 @@ def fit_centerline(
     section: float | None = None,
     spacing: float | None = None,
     start_hint: np.ndarray | None = None,
+    voxel: float | None = None,
+    every_point: bool = False,
 ) -> CenterlineFit:
     """Fit short cylinders along a scanned hose surface.
 
@@ -93,44 +111,76 @@ def fit_centerline(
     spacing: distance between stations, mm (default one radius).
     start_hint: a point near the start of the hose (e.g. the start mount), to number the
     stations from that end.
+    voxel: edge of the voxel grid for the final fits, mm (default a tenth of the radius; 0:
+    every point, slow beyond ~10^5 points).  The outlier test, the guide and the first pass
+    use a grid of at least a quarter of the radius.
+    every_point: fit the final cylinders to every point that is not an outlier rather than
+    to the voxel centroids (slow: the reference the voxel grid is measured against).
     Raises ValueError when the points do not form a hose-like shape.
     """
     if not nominal_radius > 0.0:
         raise ValueError(f"nominal radius = {nominal_radius!r}: give the hose's outer radius in mm")
     section = 4.0 * nominal_radius if section is None else section
     spacing = nominal_radius if spacing is None else spacing
+    voxel = nominal_radius / VOXELS_PER_RADIUS if voxel is None else voxel
+    if not voxel >= 0.0:
+        raise ValueError(f"voxel = {voxel!r}: give the voxel edge in mm, 0 or more")
     points = np.asarray(points, dtype=float)
-    clean = _drop_outliers(points)
-    guide = _guide_from_axis_points(_axis_candidates(clean, nominal_radius), nominal_radius, spacing)
+    grid = voxel_cloud(points, voxel)
+    coarse = voxel_cloud(grid.points, max(voxel, nominal_radius / GUIDE_VOXELS_PER_RADIUS), weights=grid.counts)
+    kept_coarse = _not_isolated(coarse)
+    kept = kept_coarse[coarse.inverse]
+    clean, coarse = grid.subset(kept), coarse.subset(kept_coarse)
+    guide = _guide_from_axis_points(_axis_candidates(coarse.points, nominal_radius), nominal_radius, spacing)
     if start_hint is not None and np.linalg.norm(guide[-1] - start_hint) < np.linalg.norm(guide[0] - start_hint):
         guide = guide[::-1]
-    fit = _fit_sections(clean, guide, nominal_radius, section)
-    if fit.points.shape[0] >= 4:  # second pass along the fitted axis
-        guide = _resample(_smooth(fit.points, 2), spacing)
-        fit = _fit_sections(clean, guide, nominal_radius, section)
-    fit.outliers = points.shape[0] - clean.shape[0]
+    first = _fit_sections(coarse, guide, nominal_radius, section, _coverage_gaps(coarse.points, guide, nominal_radius))
+    if first.points.shape[0] >= 5:  # second pass along the fitted axis, a spacing longer at both ends
+        axis = _extend(_along_spline(first.points, 0.1 * spacing), spacing)
+        guide = _resample(axis, spacing, _phase(axis, start_hint, spacing))
+    final = clean
+    if every_point:
+        surface = points[kept[grid.inverse]]
+        final = VoxelCloud(surface, np.ones(surface.shape[0], dtype=np.int64))
+    fit = _fit_sections(final, guide, nominal_radius, section, _coverage_gaps(coarse.points, guide, nominal_radius))
+    fit.outliers = int(np.sum(grid.counts[~kept]))
     return fit
 
 
-def _drop_outliers(points: np.ndarray) -> np.ndarray:
-    """Points whose mean distance to their nearest neighbours is not far above the typical one."""
-    tree = cKDTree(points)
-    distances, _ = tree.query(points, k=min(9, points.shape[0]))
-    mean = distances[:, 1:].mean(axis=1)
-    median = np.median(mean)
-    spread = 1.4826 * np.median(np.abs(mean - median))
-    return points[mean <= median + 6.0 * spread + 0.5 * median]
+def _not_isolated(cloud: VoxelCloud) -> np.ndarray:
+    """Mask of the voxels whose mean distance to their nearest neighbours is not far above the typical one.
+
+    Typical: the median over the scan's points (each voxel counts with its points), because a
+    stray point keeps a voxel of its own while the surface's points share theirs: on a dense
+    scan the stray voxels can outnumber the surface's.
+    """
+    tree = cKDTree(cloud.points)
+    k = min(9, cloud.points.shape[0])
+    mean = np.concatenate([tree.query(cloud.points[start : start + CHUNK], k=k, workers=-1)[0][:, 1:].mean(axis=1)
+                           for start in range(0, cloud.points.shape[0], CHUNK)])
+    median = _weighted_median(mean, cloud.counts)
+    spread = 1.4826 * _weighted_median(np.abs(mean - median), cloud.counts)
+    return mean <= median + 6.0 * spread + 0.5 * median
+
+
+def _weighted_median(values: np.ndarray, weights: np.ndarray) -> float:
+    """The value below which half of the total weight lies."""
+    order = np.argsort(values)
+    cumulative = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
 
 
 def _axis_candidates(points: np.ndarray, radius: float) -> np.ndarray:
     """One candidate axis point per surface point: p -+ r n on the side where the candidates crowd."""
     tree = cKDTree(points)
-    _, neighbours = tree.query(points, k=min(NEIGHBOURS, points.shape[0]))
-    local = points[neighbours] - points[neighbours].mean(axis=1, keepdims=True)
-    _, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", local, local))
-    normals = vectors[:, :, 0]  # smallest principal axis
+    normals = np.empty_like(points)
+    for start in range(0, points.shape[0], CHUNK):
+        _, neighbours = tree.query(points[start : start + CHUNK], k=min(NEIGHBOURS, points.shape[0]), workers=-1)
+        local = points[neighbours] - points[neighbours].mean(axis=1, keepdims=True)
+        scatter = np.einsum("nki,nkj->nij", local, local)
+        normals[start : start + CHUNK] = np.linalg.eigh(scatter)[1][:, :, 0]  # smallest principal axis
     both = np.concatenate([points + radius * normals, points - radius * normals])
-    crowd = cKDTree(both).query_ball_point(both, 0.4 * radius, return_length=True)
+    crowd = cKDTree(both).query_ball_point(both, 0.4 * radius, return_length=True, workers=-1)
     n = points.shape[0]
     return np.where((crowd[:n] >= crowd[n:])[:, None], both[:n], both[n:])
 
@@ -170,35 +220,68 @@ def _smooth(polyline: np.ndarray, half_width: int) -> np.ndarray:
     return np.column_stack([np.convolve(padded[:, k], kernel, mode="valid") for k in range(3)])
 
 
-def _resample(polyline: np.ndarray, spacing: float) -> np.ndarray:
-    """Points every `spacing` mm of arc length along a polyline (both ends included)."""
+def _along_spline(points: np.ndarray, step: float) -> np.ndarray:
+    """A polyline every ~`step` mm along the smoothing spline through ordered points (smoothing chosen by
+    generalised cross-validation): it follows bends and gaps instead of cutting them with chords, so
+    arc lengths along it hardly depend on where the points lie."""
+    t = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    return make_smoothing_spline(t, points)(np.linspace(0.0, t[-1], int(np.ceil(t[-1] / step)) + 1))
+
+
+def _extend(polyline: np.ndarray, length: float) -> np.ndarray:
+    """The polyline continued straight by `length` mm beyond both ends (stations there are kept only
+    where the scan has points on both sides)."""
+    before = polyline[0] - length * (polyline[1] - polyline[0]) / np.linalg.norm(polyline[1] - polyline[0])
+    after = polyline[-1] + length * (polyline[-1] - polyline[-2]) / np.linalg.norm(polyline[-1] - polyline[-2])
+    return np.vstack([before, polyline, after])
+
+
+def _phase(polyline: np.ndarray, start_hint: np.ndarray | None, spacing: float) -> float:
+    """Arc length along the polyline of its first station, mm, so that the stations lie whole spacings
+    from the start hint (measured along the polyline, extended straight from its start): they then do
+    not depend on where the scan's points happen to end.  0 without a hint."""
+    if start_hint is None:
+        return 0.0
+    direction = (polyline[1] - polyline[0]) / np.linalg.norm(polyline[1] - polyline[0])
+    return float((np.asarray(start_hint, dtype=float) - polyline[0]) @ direction % spacing)
+
+
+def _resample(polyline: np.ndarray, spacing: float, first: float = 0.0) -> np.ndarray:
+    """Points every `spacing` mm of arc length along a polyline from arc length `first` (both ends if it is short)."""
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(polyline, axis=0), axis=1))])
-    stations = np.linspace(0.0, s[-1], max(2, int(round(s[-1] / spacing)) + 1))
+    stations = np.arange(first, s[-1], spacing)
+    if stations.size < 2:
+        stations = np.array([0.0, s[-1]])
     return np.column_stack([np.interp(stations, s, polyline[:, k]) for k in range(3)])
 
 
-def _fit_sections(points: np.ndarray, guide: np.ndarray, radius: float, section: float) -> CenterlineFit:
-    """A cylinder at every guide station; stations with too few points become gaps."""
+def _fit_sections(cloud: VoxelCloud, guide: np.ndarray, radius: float, section: float,
+                  gaps: list[tuple[float, float]]) -> CenterlineFit:
+    """A cylinder at every guide station outside the gaps, fitted to the count-weighted points near it."""
     tangents = np.gradient(guide, axis=0)
     tangents /= np.linalg.norm(tangents, axis=1)[:, None]
-    tree = cKDTree(points)
+    tree = cKDTree(cloud.points)
     reach = np.hypot(0.5 * section, 2.0 * radius)
     guide_s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(guide, axis=0), axis=1))])
-    gaps = _coverage_gaps(points, guide, radius)
     fits = []
-    for index, (centre, tangent) in enumerate(zip(guide, tangents)):
-        if any(low <= guide_s[index] <= high for low, high in gaps):
-            continue
-        near = points[tree.query_ball_point(centre, reach)]
-        along = (near - centre) @ tangent
-        inside = np.abs(along) <= 0.5 * section
-        near, along = near[inside], along[inside]
-        if near.shape[0] >= MIN_SECTION_POINTS and min(np.sum(along < 0), np.sum(along > 0)) >= 0.25 * near.shape[0]:
-            fits.append((index, _fit_cylinder(near, centre, tangent, radius)))
-        # else: too few points, or points on one side of the station only (an end): no station
-    fixed_radius = np.median([f["radius"] for _, f in fits if f["radius_fitted"]] or [radius])
-    fits = [(i, _fit_cylinder(f["points"], f["axis_point"], f["tangent"], fixed_radius, False))
-            if not f["radius_fitted"] else (i, f) for i, f in fits]
+    # The fits are small dense problems: OpenBLAS threads only add waiting (a 4000 x 7 SVD took
+    # 62 ms with its threads on this 2-core machine under load, 0.7 ms with one).
+    with threadpool_limits(1, user_api="blas"):
+        for index, (centre, tangent) in enumerate(zip(guide, tangents)):
+            if any(low <= guide_s[index] <= high for low, high in gaps):
+                continue
+            near = np.asarray(tree.query_ball_point(centre, reach), dtype=np.int64)
+            along = (cloud.points[near] - centre) @ tangent
+            inside = np.abs(along) <= 0.5 * section
+            near, along = near[inside], along[inside]
+            counts = cloud.counts[near]
+            total = counts.sum()
+            if total >= MIN_SECTION_POINTS and min(counts[along < 0].sum(), counts[along > 0].sum()) >= 0.25 * total:
+                fits.append((index, fit_cylinder(cloud.points[near], counts, centre, tangent, radius)))
+            # else: too few points, or points on one side of the station only (an end): no station
+        fixed_radius = np.median([f["radius"] for _, f in fits if f["radius_fitted"]] or [radius])
+        fits = [(i, fit_cylinder(f["points"], f["weights"], f["axis_point"], f["tangent"], fixed_radius, False))
+                if not f["radius_fitted"] else (i, f) for i, f in fits]
     if not fits:
         raise ValueError("no section of the scan has enough points for a cylinder: is it a hose, in mm?")
     axis_points = np.array([f["axis_point"] for _, f in fits])
@@ -210,7 +293,7 @@ def _fit_sections(points: np.ndarray, guide: np.ndarray, radius: float, section:
         radius=np.array([f["radius"] for _, f in fits]),
         radius_fitted=np.array([f["radius_fitted"] for _, f in fits]),
         coverage_deg=np.array([f["coverage"] for _, f in fits]),
-        point_count=np.array([f["points"].shape[0] for _, f in fits]),
+        point_count=np.array([int(f["weights"].sum()) for _, f in fits]),
         rms=np.array([f["rms"] for _, f in fits]),
         gaps=gaps,
     )
@@ -221,52 +304,3 @@ def _coverage_gaps(points: np.ndarray, guide: np.ndarray, radius: float) -> list
     along = np.sort(closest_on_polyline(points, guide)[1])
     steps = np.diff(along)
     return [(float(along[i]), float(along[i + 1])) for i in np.flatnonzero(steps > radius)]
-
-
-def _fit_cylinder(points, centre, tangent, radius, free_radius=True) -> dict:
-    """Robust bent cylinder through `points` near the station (centre, tangent); radius free or fixed.
-
-    The axis is a parabola x(t) = point + t direction + t^2/2 (k1 e1 + k2 e2), so a bent hose
-    does not pull the axis towards the outside of the bend.  Unknowns: the axis point's
-    offset in the station's cross-section (2), the tilt of the axis (2), its curvature (2)
-    and, if free, the radius.  Returns the axis point in the station's cross-section, the
-    unit axis direction there, the radius, the covered arc and the RMS residual.
-    """
-    e1 = np.cross(tangent, [1.0, 0.0, 0.0] if abs(tangent[0]) < 0.9 else [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(tangent, e1)
-
-    def axis(x):
-        point = centre + x[0] * e1 + x[1] * e2
-        direction = tangent + x[2] * e1 + x[3] * e2
-        return point, direction / np.linalg.norm(direction)
-
-    def radial_offsets(x):
-        point, direction = axis(x)
-        relative = points - point
-        t = relative @ direction
-        return relative - np.outer(t, direction) - 0.5 * np.outer(t * t, x[4] * e1 + x[5] * e2)
-
-    def residuals(x):
-        return np.linalg.norm(radial_offsets(x), axis=1) - (x[6] if free_radius else radius)
-
-    x0 = np.array([0.0] * 6 + ([radius] if free_radius else []))
-    scale = np.array([radius] * 4 + [1.0 / radius] * 2 + ([radius] if free_radius else []))
-    solution = least_squares(residuals, x0, loss="soft_l1", f_scale=0.05 * radius, x_scale=scale)
-    point, direction = axis(solution.x)
-    radial = radial_offsets(solution.x)
-    angles = np.sort(np.arctan2(radial @ e2, radial @ e1))
-    largest_gap = np.max(np.diff(np.concatenate([angles, angles[:1] + 2.0 * np.pi])))
-    coverage = np.degrees(2.0 * np.pi - largest_gap)
-    fitted_radius = solution.x[6] if free_radius else radius
-    if free_radius and (coverage < MIN_ARC_FOR_RADIUS_DEG or not 0.5 * radius < fitted_radius < 2.0 * radius):
-        free_radius = False  # refitted with the median radius of the well-covered sections
-    return {
-        "points": points,
-        "axis_point": point,
-        "tangent": direction if direction @ tangent > 0 else -direction,
-        "radius": float(fitted_radius),
-        "radius_fitted": free_radius,
-        "coverage": float(coverage),
-        "rms": float(np.sqrt(np.mean(solution.fun**2))),
-    }

@@ -7,3 +7,7 @@ envelope.py meshes the swept envelope within a memory budget.
 
 May import: model/, mechanics/, placement/, geometry/.  Not: scans/, io/, report/.
 """
+
+from hoseline import compilation
+
+compilation.install()  # Numba's cache of the envelope kernel: hoseline/compilation.py

@@ -144,6 +144,8 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None) -> Sweep
     """
     started = time.perf_counter()
     problem = sweep.problem
+    if problem.clips:  # the tracker below moves the two mounts only
+        raise ValueError("sweep: the problem has clips, which sweeps do not carry yet; remove them")
     assembly = solve(problem, progress=_prefixed(progress, "assembly"))
     count = sweep.pose_count
     n_nodes = problem.hose.segments + 1

@@ -1,0 +1,108 @@
+"""Benchmark: variation studies on Dask (LocalCluster on this machine).
+
+    python bench/bench_study.py [--placements 10000] [--sweeps 1000] [--scaling 1000] [--repeats 3]
+
+1. --placements Monte Carlo samples of the thesis hose placement (100 segments, to its 180 degrees
+   of twist), 2 workers, each sample placed from the straight hose (start "straight") and then by
+   Newton from the nominal hose (start "nominal").  Target: 60 s.
+2. --sweeps samples of the demo sweep (steer and jounce, every pose, clearance to the strut),
+   2 workers.  Target: 300 s.
+3. Scaling: --scaling placement samples on 1 and on 2 workers, --repeats times each, both starts;
+   medians of samples per second and the ratio.
+Tolerances: the end mount within a 1 mm sphere, its direction within a 2 degree cone, the length
++-1 mm (normal) and -4..+2 % under pressure, EI by a factor 2 (lognormal), the clocking +-3 degrees.
+Times are the batches from the first submission to the last result (the cluster started and the
+solver warmed before), and the whole run with the cluster's start; the machine's load is printed,
+and the workers' CPU time per sample, which does not depend on what else runs (on a shared machine
+the wall time does), with the wall time it projects for two idle cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from hoseline.demos.sweep import demo_sweep  # noqa: E402
+from hoseline.demos.thesis_hose import demo_problem  # noqa: E402
+from hoseline.procedures.variation.designs import unit_design  # noqa: E402
+from hoseline.procedures.variation.engine import Engine, Where, default_batch_size  # noqa: E402
+from hoseline.procedures.variation.samples import StudyBase, nominal_context  # noqa: E402
+from hoseline.procedures.variation.tolerances import Tolerance, Variation  # noqa: E402
+
+TOLERANCES = Variation((
+    Tolerance("end.point", "sphere", (1.0,)),
+    Tolerance("end.direction", "cone", (2.0,)),
+    Tolerance("hose.length", "normal", (1.0,)),
+    Tolerance("hose.length", "uniform", (-0.04 * 330.6, 0.02 * 330.6)),
+    Tolerance("hose.bending_stiffness", "lognormal", (2.0,)),
+    Tolerance("end.twist", "normal", (3.0,)),
+))
+
+
+def timed(base: StudyBase, count: int, workers: int, warm: bool = False) -> tuple[float, float, float, int]:
+    """(seconds of the batches, seconds with the cluster's start, worker CPU seconds per sample, failed samples).
+
+    warm: every placement sample by Newton from the nominal hose (start = "nominal"), not from the straight hose.
+    The CPU seconds are the workers' process time over the batches: what the samples cost whatever else runs.
+    """
+    context, _ = nominal_context(base, warm)
+    coordinates = TOLERANCES.coordinates(unit_design("monte-carlo", count, TOLERANCES.dimensions, 1))
+    failed = []
+    started = time.perf_counter()
+    with Engine(Where(workers=workers)) as engine:
+        before = engine.client.run(time.process_time)  # every worker up and warmed (the plugin's setup ran)
+        tick = time.perf_counter()
+        engine.run(context, coordinates, default_batch_size(count), lambda k, arrays: failed.append(arrays["failed"].sum()))
+        batches = time.perf_counter() - tick
+        cpu = sum(engine.client.run(time.process_time).values()) - sum(before.values())
+    return batches, time.perf_counter() - started, cpu / count, int(sum(failed))
+
+
+def load() -> str:
+    one, five, fifteen = os.getloadavg()
+    return f"load average {one:.2f} {five:.2f} {fifteen:.2f} on {os.cpu_count()} cores"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--placements", type=int, default=10_000)
+    parser.add_argument("--sweeps", type=int, default=1000)
+    parser.add_argument("--scaling", type=int, default=1000)
+    parser.add_argument("--repeats", type=int, default=3)
+    options = parser.parse_args()
+    placement = StudyBase(demo_problem(180.0))
+    sweep = demo_sweep()
+    sweep_base = StudyBase(sweep.problem, sweep)
+    print(load())
+
+    for start, warm in (("straight", False), ("nominal", True)):
+        if options.scaling:
+            rates = {}
+            for workers in (1, 2):
+                runs = [timed(placement, options.scaling, workers, warm) for _ in range(options.repeats)]
+                wall = statistics.median(run[0] for run in runs)
+                rates[workers] = options.scaling / wall
+                print(f"scaling, start {start}: {options.scaling} placements on {workers} worker(s): median {wall:.2f} s "
+                      f"of {options.repeats}, {rates[workers]:.0f} samples/s, worker CPU "
+                      f"{1e3 * statistics.median(run[2] for run in runs):.2f} ms per sample   ({load()})")
+            print(f"scaling, start {start}: 2 workers / 1 worker = {rates[2] / rates[1]:.2f}")
+        if options.placements:
+            batches, total, cpu, failed = timed(placement, options.placements, 2, warm)
+            print(f"placements, start {start}: {options.placements} samples on 2 workers in {batches:.1f} s ({total:.1f} s "
+                  f"with the cluster's start), {options.placements / batches:.0f} samples/s, {failed} failed, worker CPU "
+                  f"{1e3 * cpu:.2f} ms per sample (idle 2 cores: {options.placements * cpu / 2:.1f} s); target 60 s: "
+                  f"ratio {batches / 60.0:.2f}   ({load()})")
+    if options.sweeps:
+        batches, total, cpu, failed = timed(sweep_base, options.sweeps, 2)
+        print(f"sweeps: {options.sweeps} samples of {sweep.pose_count} poses on 2 workers in {batches:.1f} s ({total:.1f} s "
+              f"with the cluster's start), {failed} failed, worker CPU {1e3 * cpu:.0f} ms per sample (idle 2 cores: "
+              f"{options.sweeps * cpu / 2:.0f} s); target 300 s: ratio {batches / 300.0:.2f}   ({load()})")
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,291 @@
+"""Read study files (TOML): a problem or sweep file, the tolerances, the sampling, the limits, a design search.
+
+    name = "brake hose as built"       # optional, default the file name
+    base = "problem.toml"              # a problem file, or a sweep file ([[bodies]]), relative to this file
+    sensitivities = true               # optional: derivatives and first-order variance (placements)
+
+    [sampling]
+    method = "sobol"                   # "monte-carlo", "latin-hypercube" or "sobol"
+    samples = 1024
+    seed = 1
+    batch = 64                         # optional: samples per task
+    start = "straight"                 # or "nominal": Newton from the nominal hose (placements; checked)
+
+    [[vary]]                           # one per tolerance; several on one parameter add up
+    parameter = "end.point"            # start.point, end.point: mm
+    distribution = "sphere"            #   normal (sigma), uniform (tolerance: +-mm), sphere (radius)
+    radius = 1.0                       #   sigma and tolerance: one number or one per axis [x, y, z]
+    [[vary]]
+    parameter = "end.direction"        # start.direction, end.direction: degrees of cone
+    distribution = "cone"              #   cone (angle: uniform within it), normal (sigma per axis)
+    angle = 2.0
+    [[vary]]
+    parameter = "hose.length"          # mm, or unit = "%" of the length
+    distribution = "uniform"           #   normal (sigma), uniform (range = [low, high])
+    range = [-4.0, 2.0]
+    unit = "%"
+    label = "length change under pressure"
+    [[vary]]
+    parameter = "hose.bending_stiffness"   # also hose.torsion_factor, hose.mass_per_length: factors
+    distribution = "lognormal"         #   lognormal (factor: 95 % within [1/f, f]), loguniform (factor),
+    factor = 2.0                       #   uniform (range = [low, high] of the factor)
+    [[vary]]
+    parameter = "end.twist"            # degrees: normal (sigma), uniform (range)
+    distribution = "normal"
+    sigma = 3.0
+
+    [limits]                           # each optional
+    bend_radius = 35.0                 # mm, at least (default: the hose's min_bend_radius)
+    clearance = 20.0                   # mm, at least, every obstacle (default: each obstacle's clearance)
+    "clearance:strut" = 15.0           # one obstacle
+    end_torque = 2000.0                # N*mm, at most
+    twist_rate = 0.1                   # deg/mm, at most
+    deviation = 10.0                   # mm from the nominal shape, at most
+
+    [design]                           # optional: which length and clocking to choose
+    lengths = [320.0, 345.0]           # mm, from and to, in catalogue steps of
+    length_step = 5.0                  # mm
+    clockings = [-90.0, 90.0]          # degrees of twist at assembly, from and to, in steps of
+    clocking_step = 15.0               # degrees
+    samples = 0                        # tolerance samples judged per candidate (0: the nominal hose)
+    rank_by = "clearance:strut"        # optional: the limited quantity whose margin ranks the candidates
+
+Errors name the field, the value and the fix, as for problem files.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import AfterValidator, ConfigDict, Field, model_validator
+
+from hoseline.io.problem_file import ProblemFileError, _Section, _validated, load_problem, read_toml
+from hoseline.io.sweep_file import load_sweep
+from hoseline.procedures.variation.design_search import DesignGrid, default_rank_by
+from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
+from hoseline.procedures.variation.samples import StudyBase
+from hoseline.procedures.variation.study import Sampling, Study
+from hoseline.procedures.variation.tolerances import DISTRIBUTIONS, PARAMETERS, Tolerance, Variation
+
+MAX_SAMPLES = 10_000_000  # beyond this the stored samples would not fit in memory
+MAX_CANDIDATES = 100_000
+
+
+class StudyFileError(ProblemFileError):
+    """A study file that cannot describe a study; the message names the field, the value and the fix."""
+
+
+def _positive(value: float) -> float:
+    if not (math.isfinite(value) and value > 0.0):
+        raise ValueError("must be a positive number")
+    return value
+
+
+def _pair(value: list[float]) -> list[float]:
+    if len(value) != 2 or not all(math.isfinite(v) for v in value) or value[0] > value[1]:
+        raise ValueError("must be [from, to], two finite numbers with from <= to")
+    return value
+
+
+Pair = Annotated[list[float], AfterValidator(_pair)]
+Positive = Annotated[float, AfterValidator(_positive)]
+
+
+class SamplingSection(_Section):
+    """[sampling]: method, samples, seed, batch."""
+
+    method: Literal["monte-carlo", "latin-hypercube", "sobol"] = "sobol"
+    samples: Annotated[int, Field(ge=0, le=MAX_SAMPLES)] = 256
+    seed: Annotated[int, Field(ge=0)] = 0
+    batch: Annotated[int, Field(ge=1)] | None = None
+    start: Literal["straight", "nominal"] = "straight"
+
+
+class VarySection(_Section):
+    """[[vary]]: one tolerance."""
+
+    parameter: str
+    distribution: str
+    sigma: float | list[float] | None = None
+    tolerance: float | list[float] | None = None
+    radius: float | None = None
+    angle: float | None = None
+    range: list[float] | None = None
+    factor: float | None = None
+    unit: Literal["mm", "%"] = "mm"
+    label: str = ""
+
+
+class DesignSection(_Section):
+    """[design]: the grid of lengths and clockings."""
+
+    lengths: Pair
+    length_step: Positive
+    clockings: Pair = Field(default_factory=lambda: [0.0, 0.0])
+    clocking_step: Positive = 15.0
+    samples: Annotated[int, Field(ge=0)] = 0
+    rank_by: str | None = None
+
+
+class StudyFile(_Section):
+    """The whole study file."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+    name: str = "study"
+    base: str
+    sensitivities: bool = True
+    sampling: SamplingSection = Field(default_factory=SamplingSection)
+    vary: list[VarySection] = Field(default_factory=list)
+    limits: dict[str, float] = Field(default_factory=dict)
+    design: DesignSection | None = None
+
+    @model_validator(mode="after")
+    def _something_to_do(self) -> "StudyFile":
+        if not self.vary and self.design is None:
+            raise ValueError("nothing to study: give [[vary]] tolerances, a [design] search, or both")
+        return self
+
+
+def load_study(path: str | Path) -> tuple[Study, str, Path]:
+    """Read a study file and its base file; returns the Study, the base file's text (for the fingerprint) and path.
+
+    Raises StudyFileError naming the field, the value and the fix, and OSError when the study file
+    itself cannot be read.
+    """
+    path = Path(path)
+    data = read_toml(path, StudyFileError)
+    spec = _validated(StudyFile, data, str(path), error=StudyFileError)
+    base_path = path.parent / spec.base
+    base, text = _base(base_path, str(path), spec.base)
+    variation = Variation(tuple(_tolerance(item, k, base, str(path)) for k, item in enumerate(spec.vary)))
+    limits = _limits(spec.limits, base, str(path))
+    sampling = Sampling(spec.sampling.method, spec.sampling.samples if spec.vary else 0, spec.sampling.seed,
+                        spec.sampling.batch, spec.sampling.start)
+    if spec.vary and sampling.count == 0:
+        raise StudyFileError(f"{path}: sampling.samples = 0 with [[vary]] tolerances: give at least 1 sample")
+    design = _design(spec.design, base, limits, sampling, str(path)) if spec.design else None
+    study = Study(spec.name, base, variation, sampling, limits, spec.sensitivities, design)
+    return study, text, base_path
+
+
+def _base(path: Path, source: str, given: str) -> tuple[StudyBase, str]:
+    """The StudyBase of a problem or sweep file, and its text."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise StudyFileError(f"{source}: base = \"{given}\": cannot read {path}: {exc.strerror or exc}") from None
+    try:
+        if "bodies" in read_toml(path, ProblemFileError):
+            sweep = load_sweep(path)
+            return StudyBase(sweep.problem, sweep), text
+        return StudyBase(load_problem(path)), text
+    except ProblemFileError as exc:
+        raise StudyFileError(f"{source}: base = \"{given}\": {exc}") from None
+
+
+def _scalar(value, name: str) -> float:
+    """One finite number (the scalar form of a per-axis key)."""
+    if isinstance(value, list):
+        raise ValueError(f"{name} must be one number here, not a list")
+    return float(value)
+
+
+def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Tolerance:
+    """The Tolerance of one [[vary]] entry."""
+    where = f"{source}: vary[{k}] ({item.parameter})"
+    if item.parameter not in PARAMETERS:
+        raise StudyFileError(f"{source}: vary[{k}].parameter = \"{item.parameter}\": unknown; choose one of "
+                             f"{', '.join(PARAMETERS)}")
+    kind = PARAMETERS[item.parameter][0]
+    if item.distribution not in DISTRIBUTIONS[kind]:
+        raise StudyFileError(f"{where}: distribution = \"{item.distribution}\" does not apply; choose one of "
+                             f"{', '.join(DISTRIBUTIONS[kind])}")
+    keys = {"normal": "sigma", "uniform": "tolerance" if kind == "point" else "range", "sphere": "radius",
+            "cone": "angle", "lognormal": "factor", "loguniform": "factor"}
+    needed = keys[item.distribution]
+    given = [key for key in ("sigma", "tolerance", "radius", "angle", "range", "factor") if getattr(item, key) is not None]
+    if given != [needed]:
+        extra = [key for key in given if key != needed]
+        fix = f"remove {', '.join(extra)}" if extra else f"give {needed}"
+        raise StudyFileError(f"{where}: a {item.distribution} distribution takes {needed} only: {fix}")
+    if item.unit == "%" and item.parameter != "hose.length":
+        raise StudyFileError(f"{where}: unit = \"%\" applies to hose.length only: remove it")
+    value = getattr(item, needed)
+    try:
+        if kind == "point" and needed in ("sigma", "tolerance"):
+            size = tuple(value) if isinstance(value, list) else (float(value),) * 3
+            if len(size) != 3:
+                raise ValueError(f"{needed} must be one number or three [x, y, z]")
+        elif needed == "range":
+            if len(value) != 2:
+                raise ValueError("range must be [low, high]")
+            size = tuple(value)
+        else:
+            size = (_scalar(value, needed),)
+        if item.unit == "%":
+            size = tuple(v * base.problem.hose.length / 100.0 for v in size)
+        if item.parameter == "hose.mass_per_length" and base.problem.hose.mass_per_length == 0.0:
+            raise ValueError("the base hose is weightless (mass_per_length = 0): a factor changes nothing; give its "
+                             "mass_per_length in the base file")
+        return Tolerance(item.parameter, item.distribution, size, item.label)
+    except ValueError as exc:
+        raise StudyFileError(f"{where}: {exc}") from None
+
+
+def _limits(given: dict[str, float], base: StudyBase, source: str) -> tuple[Limit, ...]:
+    """The limits: the file's, over the defaults (the hose's minimum bend radius, each obstacle's clearance)."""
+    known = {q.name: q for q in quantities(base.obstacle_names)}
+    values: dict[str, float] = {}
+    if base.problem.hose.min_bend_radius is not None:
+        values["bend_radius"] = base.problem.hose.min_bend_radius
+    for obstacle in () if base.sweep is None else base.sweep.obstacles:
+        values[f"{CLEARANCE}{obstacle.name}"] = obstacle.clearance
+    for name, value in given.items():
+        if not math.isfinite(value):
+            raise StudyFileError(f"{source}: limits.{name} = {value!r}: must be a finite number")
+        if name == "clearance":
+            if base.sweep is None or not base.sweep.obstacles:
+                raise StudyFileError(f"{source}: limits.clearance: the base has no obstacles; remove it or use a sweep "
+                                     "file with [[obstacles]] as the base")
+            values.update({f"{CLEARANCE}{o.name}": value for o in base.sweep.obstacles})
+        elif name in known:
+            values[name] = value
+        else:
+            raise StudyFileError(f"{source}: limits.{name}: unknown quantity; choose one of "
+                                 f"{', '.join(['clearance', *known])}")
+    return tuple(Limit(known[name], values[name]) for name in known if name in values)
+
+
+def _design(section: DesignSection, base: StudyBase, limits: tuple[Limit, ...], sampling: Sampling,
+            source: str) -> DesignGrid:
+    """The DesignGrid of [design]."""
+    if not limits:
+        raise StudyFileError(f"{source}: [design] needs limits to judge the candidates: give [limits] (or a "
+                             "min_bend_radius in the base's [hose])")
+    lengths = _steps(section.lengths, section.length_step)
+    clockings = _steps(section.clockings, section.clocking_step)
+    if len(lengths) * len(clockings) * max(section.samples, 1) > MAX_CANDIDATES:
+        raise StudyFileError(f"{source}: [design]: {len(lengths)} lengths x {len(clockings)} clockings x "
+                             f"{max(section.samples, 1)} samples is more than {MAX_CANDIDATES} solves: use larger steps")
+    if section.samples > sampling.count:
+        raise StudyFileError(f"{source}: design.samples = {section.samples}: the study draws only {sampling.count} "
+                             "tolerance samples ([sampling] samples, with [[vary]]); use at most that many")
+    limits = tuple(limit for limit in limits if limit.quantity.name != "deviation")  # not judged by the search
+    if not limits:
+        raise StudyFileError(f"{source}: [design] needs a limit other than the deviation to judge the candidates")
+    names = [limit.quantity.name for limit in limits]
+    rank_by = section.rank_by or default_rank_by(limits)
+    if rank_by not in names:
+        raise StudyFileError(f"{source}: design.rank_by = \"{rank_by}\": not a limited quantity; choose one of "
+                             f"{', '.join(names)}")
+    return DesignGrid(lengths, clockings, rank_by, section.samples)
+
+
+def _steps(pair: list[float], step: float) -> tuple[float, ...]:
+    """From pair[0] to pair[1] (included when on a step) in steps of `step`."""
+    count = int(math.floor((pair[1] - pair[0]) / step + 1e-9)) + 1
+    return tuple(float(v) for v in pair[0] + step * np.arange(count))

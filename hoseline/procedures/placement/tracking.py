@@ -1,0 +1,234 @@
+"""One equilibrium of a placed hose carried through changes of its fittings and properties, step by step.
+
+Interactive work (the studio) moves a fitting a little, or changes the length or a stiffness
+a little, many times a second.  Each change is a step of continuation from the current
+equilibrium (a warm start), so a drag is a path, followed as the placement follows its path:
+
+- fittings moved (tips, frames, weight): one Newton solve from the current equilibrium; when it
+  fails, ends on an unstable equilibrium or moves the hose much more than the fittings moved
+  (a possible jump over a fold), the step is followed by continuation.follow along the straight
+  interpolation of the tips and the shortest rotation between the frames, with stability
+  monitoring and branch switching, as a sweep does between two poses;
+- properties changed (length, stiffnesses): Newton at the new properties, the change halved
+  while that fails; an equilibrium that comes out unstable is pushed along its critical modes
+  and relaxed downhill to the lowest stable state (continuation.relax_to_stable).
+
+The end roll stays clamped: the twist locked at assembly moves with the end fitting.  A step
+that cannot be completed raises PlacementError and leaves the tracked equilibrium as it was.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from hoseline.mechanics.newton import RodProperties, node_positions, solve_equilibrium
+from hoseline.mechanics.rod import Clamps, RodState
+from hoseline.mechanics.rotations import rotation_matrix, rotation_vector
+from hoseline.model.problem import Problem
+from hoseline.procedures.placement.continuation import (
+    ContinuationLog,
+    PlacementError,
+    StepControl,
+    follow,
+    push_along_modes,
+    relax_to_stable,
+)
+from hoseline.procedures.placement.result import Result
+from hoseline.procedures.placement.sequence import rod_properties, weight_vector
+from hoseline.procedures.placement.stations import build_result
+
+JUMP_FACTOR = 3.0  # a step moving a station more than this times the fittings' movement is followed in sub-steps
+CAREFUL = StepControl(first=0.1, largest=0.1)  # sub-steps of a suspicious step
+PLAIN = StepControl(first=1.0, largest=1.0)  # one step, halved as needed
+SMALLEST_PROPERTY_STEP = 1.0 / 64.0  # of a property change, before it is refused
+
+
+@dataclass(frozen=True)
+class Fittings:
+    """Where the fittings hold the hose: tips (mm) and frames (rows d1, d2, d3; d3 along the hose)."""
+
+    start_point: np.ndarray
+    start_frame: np.ndarray
+    end_point: np.ndarray
+    end_frame: np.ndarray
+
+
+@dataclass(frozen=True)
+class Step:
+    """What one change cost: Newton iterations, seconds, the events logged and the largest station movement (mm)."""
+
+    iterations: int
+    seconds: float
+    events: list[str]
+    movement: float
+
+
+class Tracker:
+    """The equilibrium of `problem`'s hose, starting from a placement `result`, carried through changes."""
+
+    def __init__(self, problem: Problem, result: Result) -> None:
+        if problem.clips:  # the clamps below hold the two fittings only
+            raise ValueError("the tracker moves the two fittings only: a problem with clips cannot be tracked yet")
+        self.problem = problem
+        self.props = rod_properties(problem)
+        self.clamps = _clamps(problem, Fittings(problem.start.point, result.start_frame, problem.end.point, result.end_frame))
+        self.state = RodState(result.frames.copy(), result.end_force.copy(), 0.0)
+        self.residual = result.residual
+        self.log = ContinuationLog()
+
+    @property
+    def fittings(self) -> Fittings:
+        """The fittings as they hold the hose now."""
+        c = self.clamps
+        return Fittings(c.start_point, c.start_frame, c.end_point, c.end_frame)
+
+    @property
+    def centerline(self) -> np.ndarray:
+        """(N+1, 3) station positions, mm."""
+        return node_positions(self.props, self.clamps, self.state)
+
+    def move(self, problem: Problem, fittings: Fittings) -> Step:
+        """Carry the equilibrium to `problem`'s hose held by `fittings` (the problem's mount points are not used).
+
+        Raises PlacementError when no equilibrium can be followed there (nothing changes then),
+        ValueError when the segment count differs (a new placement is needed).
+        """
+        started = time.perf_counter()
+        props = rod_properties(problem)
+        if props.segments != self.props.segments:
+            raise ValueError("the segment count changed: place the hose again")
+        clamps = _clamps(problem, fittings)
+        before = self.centerline
+        logged, counted = len(self.log.events), self.log.iterations
+        state = self.state
+        try:
+            if not _same_properties(props, self.props):
+                state = self._change_properties(self.props, props, self.clamps, state)
+            state = self._move_fittings(props, self.clamps, clamps, state)
+        except PlacementError:
+            del self.log.events[logged:]
+            raise
+        self.problem, self.props, self.clamps, self.state = problem, props, clamps, state
+        movement = float(np.max(np.linalg.norm(self.centerline - before, axis=1)))
+        return Step(self.log.iterations - counted, time.perf_counter() - started, self.log.events[logged:], movement)
+
+    def result(self, lock_angle_deg: float) -> Result:
+        """The tracked equilibrium as a Result (stations, moments, reactions, stability margin).
+
+        lock_angle_deg: the lock angle of the placement it started from, degrees.
+        """
+        return build_result(self.problem, self.props, self.clamps, self.state, lock_angle_deg, self.log,
+                            time.perf_counter(), self.residual)
+
+    def _move_fittings(self, props: RodProperties, old: Clamps, new: Clamps, state: RodState) -> RodState:
+        """The equilibrium under `new` clamps, from `state` in equilibrium under `old`."""
+        trial, report = solve_equilibrium(props, new, state)
+        self.log.iterations += report.iterations
+        if report.converged:
+            moved = np.max(np.linalg.norm(node_positions(props, new, trial) - node_positions(props, old, state), axis=1))
+            if report.unstable_directions == 0 and moved <= _jump_limit(old, new, props.length):
+                self.residual = report.residual
+                return trial
+
+        def path(t: float) -> Clamps:
+            return _interpolate(old, new, t)
+
+        reached = follow("move", path, props, state, self.log, control=CAREFUL if report.converged else PLAIN)
+        reached, final = solve_equilibrium(props, new, reached)
+        self.log.iterations += final.iterations
+        self.residual = final.residual
+        return reached
+
+    def _change_properties(self, old: RodProperties, new: RodProperties, clamps: Clamps, state: RodState) -> RodState:
+        """The equilibrium with properties `new`, from `state` in equilibrium with `old` (same clamps)."""
+        done, step = 0.0, 1.0
+        while done < 1.0:
+            target = min(1.0, done + step)
+            props = _blend(old, new, target)
+            trial, report = solve_equilibrium(props, clamps, state)
+            self.log.iterations += report.iterations
+            if not report.converged:
+                step *= 0.5
+                if step < SMALLEST_PROPERTY_STEP:
+                    raise PlacementError(
+                        f"no equilibrium near the current shape for the new hose properties (Newton residual "
+                        f"{report.residual:.2e} at {target:.3f} of the change); change them in smaller steps"
+                    )
+                continue
+            if report.unstable_directions != 0:
+                candidates = push_along_modes(props, clamps, trial, report.unstable_directions)
+                relaxed = relax_to_stable(props, clamps, candidates, self.log)
+                if relaxed is None:
+                    raise PlacementError("the hose lost stability with the new properties and no stable shape was found")
+                trial = relaxed[0]
+                self.log.events.append(f"properties: stability lost at {target:.3f} of the change; moved to the "
+                                       "stable branch along the critical mode")
+            self.residual = report.residual
+            done, state = target, trial
+        return state
+
+
+def twisted(frame: np.ndarray, twist_deg: float) -> np.ndarray:
+    """An end fitting frame (rows d1, d2, d3) turned by twist_deg degrees about the fitting direction -d3."""
+    return frame @ rotation_matrix(-frame[2] * math.radians(twist_deg)).T
+
+
+def _clamps(problem: Problem, fittings: Fittings) -> Clamps:
+    """The clamps of the fittings, both ends locked, with the problem's weight."""
+    return Clamps(
+        start_point=np.asarray(fittings.start_point, dtype=float),
+        start_frame=np.asarray(fittings.start_frame, dtype=float),
+        end_point=np.asarray(fittings.end_point, dtype=float),
+        end_frame=np.asarray(fittings.end_frame, dtype=float),
+        roll_free=False,
+        line_weight=weight_vector(problem),
+    )
+
+
+def _interpolate(a: Clamps, b: Clamps, t: float) -> Clamps:
+    """The clamps a fraction t of the way from a to b: tips on the straight line, frames by the shortest rotation."""
+
+    def frame(fa: np.ndarray, fb: np.ndarray) -> np.ndarray:
+        return fa @ rotation_matrix(t * rotation_vector(fb.T @ fa)).T
+
+    return Clamps(
+        start_point=(1.0 - t) * a.start_point + t * b.start_point,
+        start_frame=frame(a.start_frame, b.start_frame),
+        end_point=(1.0 - t) * a.end_point + t * b.end_point,
+        end_frame=frame(a.end_frame, b.end_frame),
+        roll_free=False,
+        line_weight=(1.0 - t) * a.line_weight + t * b.line_weight,
+    )
+
+
+def _jump_limit(old: Clamps, new: Clamps, length: float) -> float:
+    """Largest station movement (mm) a step may make without being followed in sub-steps."""
+    moves = []
+    for point_a, point_b, frame_a, frame_b in (
+        (old.start_point, new.start_point, old.start_frame, new.start_frame),
+        (old.end_point, new.end_point, old.end_frame, new.end_frame),
+    ):
+        angle = float(np.linalg.norm(rotation_vector(frame_b.T @ frame_a)))
+        moves.append(float(np.linalg.norm(point_b - point_a)) + length * angle)
+    weight_change = float(np.linalg.norm(new.line_weight - old.line_weight) / max(np.linalg.norm(old.line_weight), 1e-300))
+    allowance = length * min(weight_change, 1.0)  # a change of weight may move the hose by up to its length
+    return JUMP_FACTOR * max(moves) + allowance + 1e-6 * length
+
+
+def _same_properties(a: RodProperties, b: RodProperties) -> bool:
+    return a.segment_length == b.segment_length and bool(np.array_equal(a.stiffness, b.stiffness))
+
+
+def _blend(old: RodProperties, new: RodProperties, t: float) -> RodProperties:
+    """Properties a fraction t of the way from old to new (stiffness and segment length linear)."""
+    if t >= 1.0:
+        return new
+    return replace(
+        new,
+        stiffness=(1.0 - t) * old.stiffness + t * new.stiffness,
+        segment_length=(1.0 - t) * old.segment_length + t * new.segment_length,
+    )

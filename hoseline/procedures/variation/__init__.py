@@ -1,0 +1,16 @@
+"""Variation and design studies: a hose as built, not as drawn.
+
+tolerances.py turns a point of the unit hypercube into the deviations of one hose from its
+drawing (mount positions and directions, length, stiffness, weight, clocking) and a problem
+built with them; designs.py draws the points (Monte Carlo, Latin hypercube, Sobol);
+quantities.py defines what is judged and the limits; samples.py solves one sample (placement or
+sweep) and reads it; nominal.py holds the nominal placement's equilibria and starts samples from
+them (warm start); engine.py runs the samples in batches on Dask distributed; statistics.py turns
+samples into envelopes, probabilities with confidence intervals and variances; sensitivity.py
+differentiates the quantities with respect to every parameter at the nominal equilibrium
+(implicit function theorem with the exact Hessian) for the first-order variance;
+design_search.py judges and ranks hose lengths and clockings; study.py holds a study and reads
+its outcome off the samples; run.py runs a study from start to end.
+
+May import: model/, mechanics/, placement/, geometry/, sweep/.  Not: scans/, io/, report/.
+"""

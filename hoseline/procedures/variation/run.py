@@ -1,0 +1,115 @@
+"""A study from start to end: the nominal hose, the sensitivities, the samples, the design search, the outcome.
+
+Batches go through a store (anything with finished() and save(k, arrays); io/study_results.py
+keeps them as files so an interrupted study resumes): finished batches are not run again.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from typing import Protocol
+
+import numpy as np
+
+from hoseline.procedures.placement.continuation import PlacementError, Progress
+from hoseline.procedures.variation.design_search import judge
+from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
+from hoseline.procedures.variation.samples import StudyContext, nominal_context
+from hoseline.procedures.variation.sensitivity import placement_sensitivities
+from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
+
+
+class BatchStore(Protocol):
+    """Where finished batches of one stage are kept."""
+
+    def finished(self) -> dict[int, dict[str, np.ndarray]]: ...
+
+    def save(self, batch: int, arrays: dict[str, np.ndarray]) -> None: ...
+
+
+class MemoryStore:
+    """A BatchStore in memory (nothing to resume from)."""
+
+    def __init__(self) -> None:
+        self.batches: dict[int, dict[str, np.ndarray]] = {}
+
+    def finished(self) -> dict[int, dict[str, np.ndarray]]:
+        return dict(self.batches)
+
+    def save(self, batch: int, arrays: dict[str, np.ndarray]) -> None:
+        self.batches[batch] = arrays
+
+
+def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *, where: Where = Where(),
+              progress: Progress | None = None) -> StudyOutcome:
+    """Run `study` and return its outcome.
+
+    stores: stage name ("samples", "design") -> its BatchStore (default: in memory).  where: where the
+    batches run.  progress: callable(phase, fraction).  Raises PlacementError when the nominal hose
+    cannot be solved.
+    """
+    stores = stores or (lambda stage: MemoryStore())
+    started = time.perf_counter()
+    context, nominal = nominal_context(study.base, warm=study.sampling.start == "nominal")
+    notes = []
+    sensitivities = None
+    if study.sensitivities and study.variation.tolerances:
+        if study.base.sweep is not None:
+            notes.append("sensitivities and first-order estimates are computed for placements only; this study "
+                         "varies a sweep, so only the Monte Carlo numbers are given")
+        else:
+            try:
+                sensitivities = placement_sensitivities(study.base.problem, study.variation.varied)
+            except (PlacementError, ValueError) as exc:
+                notes.append(f"no sensitivities: {exc}")
+    coordinates = study.coordinates()
+    timings = {}
+    with Engine(where) as engine:
+        tick = time.perf_counter()
+        samples = _stage(engine, "samples", context, coordinates, study.sampling.batch_size(), stores, progress)
+        timings["samples"] = time.perf_counter() - tick
+        design_samples = None
+        if study.design is not None:
+            grid = study.design
+            deviations = coordinates[:grid.samples] if grid.samples else np.zeros((1, 15))
+            rows = grid.coordinates(study.base.problem.hose.length, study.base.problem.end_twist_deg, deviations)
+            tick = time.perf_counter()
+            cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose
+            design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
+            timings["design"] = time.perf_counter() - tick
+    outcome = summarize(study, samples, nominal.values(nominal.centerlines), nominal.centerlines, sensitivities)
+    outcome.notes[:0] = notes
+    if design_samples is not None:
+        names = [q.name for q in study.quantities]
+        design_limits = tuple(limit for limit in study.limits if limit.quantity.name != "deviation")
+        outcome.design = judge(study.design, design_limits, names, design_samples)
+    outcome.run = {
+        "where": where.describe(),
+        "samples": len(coordinates),
+        "samples per second": len(coordinates) / timings["samples"] if len(coordinates) and timings["samples"] else None,
+        "seconds, samples": timings["samples"],
+        "seconds, design search": timings.get("design"),
+        "seconds, whole study": time.perf_counter() - started,
+    }
+    return outcome
+
+
+def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.ndarray, batch_size: int,
+           stores: Callable[[str], BatchStore], progress: Progress | None) -> dict[str, np.ndarray] | None:
+    """Run one stage's batches (skipping those its store has) and return its merged samples (None if empty)."""
+    if len(coordinates) == 0:
+        return None
+    store = stores(name)
+    batches = store.finished()
+    total = -(-len(coordinates) // batch_size)
+
+    def keep(k: int, arrays: dict[str, np.ndarray]) -> None:
+        store.save(k, arrays)
+        batches[k] = arrays
+        if progress is not None:
+            progress(name, len(batches) / total)
+
+    engine.run(context, coordinates, batch_size, keep, done=set(batches))
+    return merge_batches(batches)

@@ -1,0 +1,282 @@
+"""Tolerances: how one hose as built deviates from its drawing, as coordinates, and the problem they give.
+
+Every deviation is a value of one of the canonical coordinates (user units):
+
+    start.x, start.y, start.z, end.x, end.y, end.z     mm, the fitting tips moved
+    start.tilt_a, start.tilt_b, end.tilt_a, end.tilt_b  degrees, the fitting direction turned about
+                                                        its two section axes a, b (rows 0, 1 of
+                                                        frame_from_tangent(direction))
+    hose.length                                         mm added to the length
+    hose.bending                                        ln of the factor on EI (and GJ with it: the
+                                                        torsion factor stays)
+    hose.torsion                                        ln of the factor on the torsion factor (GJ)
+    hose.mass                                           ln of the factor on the mass per length
+    end.twist                                           degrees added to the twist at assembly
+
+A Tolerance maps its own dimensions of a point u of the unit hypercube onto some coordinates
+by the inverse distribution function, so one code serves Monte Carlo and space-filling designs
+alike; several tolerances on one parameter add up (a length tolerance and the change under
+pressure).  Each also knows the mean and covariance of what it adds, for the first-order
+variance (sensitivity.py).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.special import ndtri
+
+from hoseline.mechanics.rotations import frame_from_tangent, rotation_matrix
+from hoseline.model.mounts import Mount
+from hoseline.model.problem import Problem
+
+COORDINATES = (
+    "start.x", "start.y", "start.z", "start.tilt_a", "start.tilt_b",
+    "end.x", "end.y", "end.z", "end.tilt_a", "end.tilt_b",
+    "hose.length", "hose.bending", "hose.torsion", "hose.mass", "end.twist",
+)
+COORDINATE_UNITS = ("mm",) * 3 + ("deg",) * 2 + ("mm",) * 3 + ("deg",) * 2 + ("mm", "ln", "ln", "ln", "deg")
+INDEX = {name: k for k, name in enumerate(COORDINATES)}
+
+Z95 = 1.959963984540054  # the standard normal's 97.5 % point: lognormal `factor` holds 95 % of the hoses
+
+# parameter of the study file -> (kind, canonical coordinates it moves)
+PARAMETERS = {
+    "start.point": ("point", ("start.x", "start.y", "start.z")),
+    "end.point": ("point", ("end.x", "end.y", "end.z")),
+    "start.direction": ("tilt", ("start.tilt_a", "start.tilt_b")),
+    "end.direction": ("tilt", ("end.tilt_a", "end.tilt_b")),
+    "hose.length": ("offset", ("hose.length",)),
+    "hose.bending_stiffness": ("factor", ("hose.bending",)),
+    "hose.torsion_factor": ("factor", ("hose.torsion",)),
+    "hose.mass_per_length": ("factor", ("hose.mass",)),
+    "end.twist": ("offset", ("end.twist",)),
+}
+
+# kind -> distribution -> its parameters, in the order Tolerance.size holds them
+DISTRIBUTIONS = {
+    "point": {"normal": ("sigma_x", "sigma_y", "sigma_z"), "uniform": ("tolerance_x", "tolerance_y", "tolerance_z"),
+              "sphere": ("radius",)},
+    "tilt": {"cone": ("angle",), "normal": ("sigma",)},
+    "offset": {"normal": ("sigma",), "uniform": ("low", "high")},
+    "factor": {"lognormal": ("factor",), "loguniform": ("factor",), "uniform": ("low", "high")},
+}
+
+_EDGE = 1e-12  # unit points are kept this far inside (0, 1): the normal's inverse is infinite at the ends
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """One varied parameter and its distribution.
+
+    parameter: a key of PARAMETERS, e.g. "end.point".  distribution: a key of
+    DISTRIBUTIONS[kind].  size: the distribution's parameters (DISTRIBUTIONS names them), user
+    units: mm for points and length offsets, degrees for tilts and twists, factors (> 0,
+    dimensionless) for stiffness and mass.  label: for reports, e.g. "length change under pressure".
+
+    normal: sigma.  uniform: offsets in [low, high], or +-tolerance per axis for a point, or a
+    factor in [low, high].  sphere: uniform in a ball of the radius.  cone: the direction
+    uniform over the spherical cap of the half angle.  lognormal: 95 % of the factors within
+    [1/factor, factor].  loguniform: ln(factor) uniform within +-ln(factor).
+    """
+
+    parameter: str
+    distribution: str
+    size: tuple[float, ...]
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        if self.parameter not in PARAMETERS:
+            raise ValueError(f"unknown parameter {self.parameter!r}: choose one of {', '.join(PARAMETERS)}")
+        kind = self.kind
+        if self.distribution not in DISTRIBUTIONS[kind]:
+            raise ValueError(f"{self.parameter}: distribution {self.distribution!r} does not apply; choose one of "
+                             f"{', '.join(DISTRIBUTIONS[kind])}")
+        names = DISTRIBUTIONS[kind][self.distribution]
+        size = tuple(float(v) for v in self.size)
+        if len(size) != len(names) or not all(math.isfinite(v) for v in size):
+            raise ValueError(f"{self.parameter}: {self.distribution} needs {', '.join(names)}, finite numbers")
+        if self.distribution == "uniform":
+            if kind in ("offset", "factor") and not size[0] < size[1]:
+                raise ValueError(f"{self.parameter}: uniform range [{size[0]:g}, {size[1]:g}] must have low < high")
+            if kind == "factor" and size[0] <= 0.0:
+                raise ValueError(f"{self.parameter}: a factor range must stay positive, got low = {size[0]:g}")
+        elif self.distribution in ("lognormal", "loguniform"):
+            if not size[0] > 1.0:
+                raise ValueError(f"{self.parameter}: factor = {size[0]:g} must be above 1 (e.g. 2 for a factor of two)")
+        elif self.distribution == "cone" and not 0.0 < size[0] < 90.0:
+            raise ValueError(f"{self.parameter}: cone angle = {size[0]:g} must lie in (0, 90) degrees")
+        elif any(v < 0.0 for v in size) or max(size) == 0.0:
+            raise ValueError(f"{self.parameter}: {', '.join(names)} must be zero or positive, not all zero")
+        object.__setattr__(self, "size", size)
+
+    @property
+    def kind(self) -> str:
+        """point, tilt, offset or factor."""
+        return PARAMETERS[self.parameter][0]
+
+    @property
+    def coordinates(self) -> tuple[int, ...]:
+        """Indexes into COORDINATES of what this tolerance moves."""
+        return tuple(INDEX[name] for name in PARAMETERS[self.parameter][1])
+
+    @property
+    def dimensions(self) -> int:
+        """How many dimensions of the unit hypercube it takes."""
+        return {"point": 3, "tilt": 2}.get(self.kind, 1)
+
+    @property
+    def name(self) -> str:
+        """The label, or parameter and distribution."""
+        return self.label or f"{self.parameter} ({self.distribution})"
+
+    def values(self, unit: np.ndarray) -> np.ndarray:
+        """(n, len(coordinates)) coordinate values of (n, dimensions) unit points in (0, 1)."""
+        u = np.clip(np.asarray(unit, dtype=float), _EDGE, 1.0 - _EDGE)
+        size = np.array(self.size)
+        if self.distribution == "normal":
+            return size * ndtri(u) if self.kind == "point" else size[0] * ndtri(u)
+        if self.distribution == "uniform":
+            if self.kind == "point":
+                return size * (2.0 * u - 1.0)
+            low, high = size
+            values = low + (high - low) * u
+            return np.log(values) if self.kind == "factor" else values
+        if self.distribution == "sphere":
+            polar = 2.0 * u[:, 0] - 1.0
+            azimuth = 2.0 * math.pi * u[:, 1]
+            radius = size[0] * np.cbrt(u[:, 2])
+            ring = np.sqrt(1.0 - polar**2)
+            return radius[:, None] * np.column_stack([ring * np.cos(azimuth), ring * np.sin(azimuth), polar])
+        if self.distribution == "cone":
+            azimuth = 2.0 * math.pi * u[:, 0]
+            angle = np.degrees(np.arccos(1.0 - u[:, 1] * (1.0 - math.cos(math.radians(size[0])))))
+            return angle[:, None] * np.column_stack([np.cos(azimuth), np.sin(azimuth)])
+        if self.distribution == "lognormal":
+            return math.log(size[0]) / Z95 * ndtri(u)
+        return math.log(size[0]) * (2.0 * u - 1.0)  # loguniform
+
+    def mean(self) -> np.ndarray:
+        """(len(coordinates),) mean of what it adds."""
+        if self.distribution == "uniform" and self.kind == "offset":
+            return np.array([0.5 * sum(self.size)])
+        if self.distribution == "uniform" and self.kind == "factor":
+            low, high = self.size
+            return np.array([(high * math.log(high) - high - low * math.log(low) + low) / (high - low)])
+        return np.zeros(len(self.coordinates))
+
+    def covariance(self) -> np.ndarray:
+        """(k, k) covariance of what it adds (k = len(coordinates)); the components are uncorrelated."""
+        size = np.array(self.size)
+        k = len(self.coordinates)
+        if self.distribution == "normal":
+            return np.diag(size**2) if self.kind == "point" else np.eye(k) * size[0] ** 2
+        if self.distribution == "uniform":
+            if self.kind == "point":
+                return np.diag(size**2 / 3.0)
+            low, high = size
+            if self.kind == "offset":
+                return np.array([[(high - low) ** 2 / 12.0]])
+            second = _integral_log_squared(high) - _integral_log_squared(low)
+            return np.array([[second / (high - low) - self.mean()[0] ** 2]])
+        if self.distribution == "sphere":
+            return np.eye(3) * size[0] ** 2 / 5.0
+        if self.distribution == "cone":
+            alpha = math.radians(size[0])
+            # E[theta^2] for theta with density sin(theta) / (1 - cos(alpha)) on [0, alpha]
+            second = (2.0 * alpha * math.sin(alpha) + (2.0 - alpha**2) * math.cos(alpha) - 2.0) / (1.0 - math.cos(alpha))
+            return np.eye(2) * math.degrees(1.0) ** 2 * second / 2.0
+        if self.distribution == "lognormal":
+            return np.array([[(math.log(size[0]) / Z95) ** 2]])
+        return np.array([[math.log(size[0]) ** 2 / 3.0]])  # loguniform
+
+
+def _integral_log_squared(x: float) -> float:
+    """An antiderivative of ln(x)^2: x (ln^2 x - 2 ln x + 2)."""
+    log = math.log(x)
+    return x * (log * log - 2.0 * log + 2.0)
+
+
+@dataclass(frozen=True)
+class Variation:
+    """All tolerances of a study, each with its own dimensions of the unit hypercube, in order."""
+
+    tolerances: tuple[Tolerance, ...]
+
+    @property
+    def dimensions(self) -> int:
+        """Dimensions of the unit hypercube (the design's columns)."""
+        return sum(t.dimensions for t in self.tolerances)
+
+    @property
+    def varied(self) -> tuple[int, ...]:
+        """Indexes of the canonical coordinates some tolerance moves, in COORDINATES order."""
+        return tuple(sorted({k for t in self.tolerances for k in t.coordinates}))
+
+    def coordinates(self, unit: np.ndarray) -> np.ndarray:
+        """(n, len(COORDINATES)) deviations of the hoses at unit points (n, dimensions)."""
+        unit = np.atleast_2d(np.asarray(unit, dtype=float))
+        out = np.zeros((unit.shape[0], len(COORDINATES)))
+        column = 0
+        for tolerance in self.tolerances:
+            values = tolerance.values(unit[:, column:column + tolerance.dimensions])
+            out[:, list(tolerance.coordinates)] += values.reshape(unit.shape[0], -1)
+            column += tolerance.dimensions
+        return out
+
+    def mean(self) -> np.ndarray:
+        """(len(COORDINATES),) mean deviation."""
+        out = np.zeros(len(COORDINATES))
+        for tolerance in self.tolerances:
+            out[list(tolerance.coordinates)] += tolerance.mean()
+        return out
+
+    def covariance(self) -> np.ndarray:
+        """(len(COORDINATES), len(COORDINATES)) covariance of the deviations (tolerances independent)."""
+        out = np.zeros((len(COORDINATES), len(COORDINATES)))
+        for tolerance in self.tolerances:
+            index = np.array(tolerance.coordinates)
+            out[np.ix_(index, index)] += tolerance.covariance()
+        return out
+
+
+def tilt_axes(direction: np.ndarray) -> np.ndarray:
+    """(2, 3) the axes a, b a fitting direction is tilted about (unit, perpendicular to it and each other)."""
+    return frame_from_tangent(direction)[:2]
+
+
+def _tilted(mount: Mount, offset: np.ndarray, tilt_deg: np.ndarray) -> Mount:
+    """The mount moved by `offset` (mm) and its direction turned by `tilt_deg` about its tilt axes."""
+    direction = mount.direction
+    if np.any(tilt_deg != 0.0):
+        turn = np.radians(tilt_deg) @ tilt_axes(direction)
+        direction = rotation_matrix(turn) @ direction
+    return Mount(mount.point + offset, direction)
+
+
+def perturbed(problem: Problem, deviation: np.ndarray) -> Problem:
+    """The problem of a hose with the deviations `deviation` ((len(COORDINATES),), user units) from `problem`.
+
+    Raises ValueError when the hose no longer reaches its mounts (the Problem's own check).
+    """
+    c = np.asarray(deviation, dtype=float)
+    hose = problem.hose
+    bending = math.exp(c[INDEX["hose.bending"]])
+    second = None if hose.bending_stiffness_2 is None else hose.bending_stiffness_2 * bending
+    hose = replace(
+        hose,
+        length=hose.length + c[INDEX["hose.length"]],
+        bending_stiffness=hose.bending_stiffness * bending,
+        bending_stiffness_2=second,
+        torsional_stiffness=hose.torsional_stiffness * bending * math.exp(c[INDEX["hose.torsion"]]),
+        mass_per_length=hose.mass_per_length * math.exp(c[INDEX["hose.mass"]]),
+    )
+    return replace(
+        problem,
+        hose=hose,
+        start=_tilted(problem.start, c[0:3], c[3:5]),
+        end=_tilted(problem.end, c[5:8], c[8:10]),
+        end_twist_deg=problem.end_twist_deg + c[INDEX["end.twist"]],
+    )

@@ -1,0 +1,262 @@
+"""The studio's working state: the problem being edited, the hose's current equilibrium, obstacles and a sweep.
+
+One Session per server.  Every change the page asks for (a fitting moved, a slider, a sweep pose)
+is a step of continuation from the current equilibrium (procedures/placement/tracking.py); "place
+again" runs the published placement sequence (procedures/placement/sequence.solve) from the
+straight hose.  Changes are checked by the same code as problem files (io/problem_file.py), so
+the page cannot make a problem that a file could not hold.
+
+The fittings: the start fitting's frame and the end fitting's frame at zero twist (the frame the
+placement locked, moved with the fitting since) are what the page drags; the end fitting is
+clamped at that frame turned by the twist at assembly.  A sweep's poses move the fittings from
+their design position, where the sweep was opened, as a sweep run does.
+
+Not thread-safe: the server calls it from one worker thread only.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from hoseline.io.problem_file import ProblemFileError, problem_from_dict, problem_to_dict, problem_to_toml
+from hoseline.model.motion import Pose, quaternion_matrix
+from hoseline.model.problem import Problem
+from hoseline.model.sweep import DEFAULT_CLEARANCE, Obstacle, SweepProblem
+from hoseline.procedures.geometry.clearance import TriangleIndex
+from hoseline.procedures.placement.continuation import PlacementError
+from hoseline.procedures.placement.result import Result
+from hoseline.procedures.placement.sequence import solve
+from hoseline.procedures.placement.tracking import Fittings, Step, Tracker, twisted
+from hoseline.studio.messages import HoseTarget, Target
+from hoseline.studio.view import placement_comparison, session_message, state_message
+
+
+MAX_TWIST_STEP = 90.0  # degrees of twist per step of continuation (a frame cannot tell 270 from -90)
+
+
+class StudioError(ValueError):
+    """A change the studio refuses (bad values, a hose that cannot reach); the message is shown on the page."""
+
+
+@dataclass
+class ShownObstacle:
+    """An obstacle on the page with its search tree for clearance."""
+
+    obstacle: Obstacle
+    index: TriangleIndex
+
+
+class Session:
+    """The problem, the hose's equilibrium and the surroundings the page shows.
+
+    problem: the problem to start from (placed at once).  sweep: a sweep whose motion the
+    timeline plays and whose obstacles are shown (its problem is used if given).
+    """
+
+    def __init__(self, problem: Problem | None = None, *, sweep: SweepProblem | None = None) -> None:
+        if (problem is None) == (sweep is None):
+            raise ValueError("give a problem or a sweep")
+        self.obstacles: list[ShownObstacle] = []
+        self.sweep: SweepProblem | None = None
+        self.pose_index: int | None = None
+        self.revision = 0  # counts the changes of the session's content (files opened, obstacles added)
+        self.last_step: Step | None = None
+        self.comparison: dict | None = None
+        if sweep is not None:
+            self.open_sweep(sweep)
+        else:
+            self.open_problem(problem)
+
+    # --- opening things ---
+
+    def open_problem(self, problem: Problem) -> None:
+        """Edit `problem` from now on (the obstacles stay; a sweep's motion is dropped); place it.
+
+        Raises PlacementError when it cannot be placed (the session stays as it was).
+        """
+        self._adopt(problem, solve(problem))
+        self.sweep, self.pose_index = None, None
+        self.revision += 1
+
+    def open_sweep(self, sweep: SweepProblem) -> None:
+        """Edit the sweep's problem at design position, show its obstacles, play its motion; place it."""
+        obstacles = [ShownObstacle(o, TriangleIndex(o.vertices, o.faces)) for o in sweep.obstacles]
+        self._adopt(sweep.problem, solve(sweep.problem))
+        self.sweep, self.pose_index, self.obstacles = sweep, None, obstacles
+        self.design = self.fittings_at_zero_twist()
+        self.revision += 1
+
+    def add_obstacle(self, name: str, vertices: np.ndarray, faces: np.ndarray, source: str) -> None:
+        """Show a fixed obstacle (mm) with the default required clearance."""
+        obstacle = Obstacle(name, vertices, faces, DEFAULT_CLEARANCE, None, source)
+        self.obstacles.append(ShownObstacle(obstacle, TriangleIndex(vertices, faces)))
+        self.revision += 1
+
+    def set_mounts(self, start, end) -> None:
+        """Put the fittings on new mounts (model.Mount, e.g. from an IGES file) and place the hose there."""
+        data = problem_to_dict(self.problem)
+        data["start"] = {"point": start.point.tolist(), "direction": start.direction.tolist()}
+        data["end"].update(point=end.point.tolist(), direction=end.direction.tolist())
+        problem = self._validated(data)
+        self._adopt(problem, solve(problem))
+        self.pose_index = None
+        self.revision += 1
+
+    # --- the hose ---
+
+    def place_again(self) -> None:
+        """Run the published placement sequence from the straight hose and continue from its result."""
+        self._adopt(self.problem, solve(self.problem))
+
+    def _adopt(self, problem: Problem, placement: Result) -> None:
+        """Continue from a fresh placement of `problem`."""
+        self.problem, self.placement = problem, placement
+        self.tracker = Tracker(problem, placement)
+        self.end_base = twisted(placement.end_frame, -problem.end_twist_deg)
+        self.comparison = placement_comparison(self.tracker.centerline, self.end_frame, placement)
+        self.last_step = None
+
+    def apply(self, target: Target) -> None:
+        """Carry the hose to `target` (fittings, twist, hose properties, or a sweep pose) by continuation.
+
+        Raises StudioError (bad values) or PlacementError (no equilibrium there); nothing changes then.
+        """
+        twist = self.problem.end_twist_deg if target.twist is None else target.twist
+        if target.pose is not None:
+            start_point, start_frame, end_point, end_base = self._pose_fittings(target.pose)
+        else:
+            fittings = self.fittings_at_zero_twist()
+            start_point, start_frame, end_point, end_base = (
+                fittings.start_point, fittings.start_frame, fittings.end_point, fittings.end_frame)
+            if target.start is not None:
+                start_point, start_frame = np.array(target.start.point), _frame(target.start.quaternion)
+            if target.end is not None:
+                end_point, end_base = np.array(target.end.point), _frame(target.end.quaternion)
+        data = problem_to_dict(self.problem)
+        data["start"] = {"point": start_point.tolist(), "direction": start_frame[2].tolist()}
+        data["end"] = {"point": end_point.tolist(), "direction": (-end_base[2]).tolist(), "twist": twist}
+        if target.hose is not None:
+            data["hose"] = _hose_section(data["hose"], self.problem, target.hose)
+        problem = self._validated(data)
+        self.last_step = self._twist_to(problem, Fittings(problem.start.point, start_frame, problem.end.point, end_base))
+        self.problem, self.end_base = problem, end_base
+        if target.pose is not None:
+            self.pose_index = target.pose
+        self.comparison = None
+
+    def _twist_to(self, problem: Problem, fittings: Fittings) -> Step:
+        """Move the tracker to `problem` with `fittings` (the end frame at zero twist) and the problem's twist.
+
+        A frame says nothing of whole turns, and a step between two frames takes the shorter way
+        round, so a change of twist is made in steps of at most MAX_TWIST_STEP degrees, each taking
+        the way the twist goes.  All or nothing: a failing step leaves the tracker as it was.
+        """
+        before, centerline = copy.copy(self.tracker), self.tracker.centerline
+        change = problem.end_twist_deg - self.problem.end_twist_deg
+        count = max(1, math.ceil(abs(change) / MAX_TWIST_STEP))
+        steps = []
+        try:
+            for k in range(1, count + 1):
+                twist = problem.end_twist_deg - change * (count - k) / count
+                steps.append(self.tracker.move(replace(problem, end_twist_deg=twist),
+                                               replace(fittings, end_frame=twisted(fittings.end_frame, twist))))
+        except Exception:
+            self.tracker = before
+            raise
+        movement = float(np.max(np.linalg.norm(self.tracker.centerline - centerline, axis=1)))
+        return Step(sum(s.iterations for s in steps), sum(s.seconds for s in steps),
+                    [event for s in steps for event in s.events], movement)
+
+    def compare_with_placement(self) -> dict:
+        """Place the current problem afresh and say how far that shape is from the one shown (idle work)."""
+        if self.comparison is None:
+            try:
+                self.comparison = placement_comparison(self.tracker.centerline, self.end_frame, solve(self.problem))
+            except PlacementError as exc:
+                self.comparison = {"same": False, "failed": str(exc)}
+        return self.comparison
+
+    @property
+    def end_frame(self) -> np.ndarray:
+        """The end fitting's frame as clamped (twist included)."""
+        return self.tracker.fittings.end_frame
+
+    def fittings_at_zero_twist(self) -> Fittings:
+        """The fittings now, the end frame without the twist at assembly (what the page drags)."""
+        fittings = self.tracker.fittings
+        return replace(fittings, end_frame=self.end_base)
+
+    def obstacle_pose(self, shown: ShownObstacle) -> Pose:
+        """Where an obstacle is: moved with its body to the sweep pose shown, else at design position."""
+        if self.sweep is None or self.pose_index is None:
+            return Pose()
+        return self.sweep.pose(shown.obstacle.body, self.pose_index)
+
+    def result(self) -> Result:
+        """The shape shown as a Result (for the exports and the readouts)."""
+        return self.tracker.result(self.placement.lock_angle_deg)
+
+    def problem_toml(self) -> str:
+        """The problem as a problem file (mounts, twist and hose as now)."""
+        return problem_to_toml(self.problem)
+
+    def sweep_to_run(self) -> SweepProblem:
+        """The open sweep with the hose and twist as now, at the sweep's design mounts."""
+        if self.sweep is None:
+            raise StudioError("no sweep is open: open a sweep file (a problem file with [[bodies]]) first")
+        design = self.sweep.problem
+        problem = replace(design, hose=self.problem.hose, end_twist_deg=self.problem.end_twist_deg,
+                          gravity=self.problem.gravity)
+        return replace(self.sweep, problem=problem)
+
+    def message(self) -> dict:
+        """What the page draws: the shape, the fittings, colour-map data and readouts (view.state_message)."""
+        return state_message(self)
+
+    def session_message(self) -> dict:
+        """What changes only when a file is opened (view.session_message)."""
+        return session_message(self)
+
+    # --- helpers ---
+
+    def _pose_fittings(self, index: int):
+        """Start tip, start frame, end tip and end frame at zero twist at sweep pose `index`."""
+        if self.sweep is None:
+            raise StudioError("no sweep is open: the timeline needs a sweep file")
+        if not 0 <= index < self.sweep.pose_count:
+            raise StudioError(f"pose {index} is outside the sweep's 0..{self.sweep.pose_count - 1}")
+        start = self.sweep.pose(self.sweep.start_body, index)
+        end = self.sweep.pose(self.sweep.end_body, index)
+        return (start.point(self.design.start_point), start.frame(self.design.start_frame),
+                end.point(self.design.end_point), end.frame(self.design.end_frame))
+
+    def _validated(self, data: dict) -> Problem:
+        """The problem of a problem-file dict, checked as a file is (StudioError with the file's message)."""
+        try:
+            return problem_from_dict(data, source="studio")
+        except ProblemFileError as exc:
+            raise StudioError(str(exc).removeprefix("studio: ")) from None
+
+
+def _frame(quaternion: list[float]) -> np.ndarray:
+    """Fitting frame (rows d1, d2, d3) of an object turned by the unit quaternion (w, x, y, z)."""
+    return quaternion_matrix(quaternion).T
+
+
+def _hose_section(section: dict, problem: Problem, hose: HoseTarget) -> dict:
+    """The [hose] table with the page's values put in (torsion factor kept when EI changes)."""
+    section = dict(section)
+    factor = problem.hose.torsion_factor if hose.torsion_factor is None else hose.torsion_factor
+    for key in ("length", "bending_stiffness", "mass_per_length"):
+        value = getattr(hose, key)
+        if value is not None:
+            section[key] = value
+    if "bending_stiffness_2" in section and hose.bending_stiffness is not None:
+        section["bending_stiffness_2"] *= hose.bending_stiffness / problem.hose.bending_stiffness
+    del section["torsional_stiffness"]
+    section["torsion_factor"] = factor
+    return section

@@ -1,0 +1,100 @@
+// The two fittings: each an object whose axes are the fitting frame (x = d1, y = d2, z = d3 along the
+// hose; the end fitting without its twist), drawn as a short body behind the tip with its frame.
+// A TransformControls gizmo moves or turns the selected one; every change of it is a drag event.
+import * as THREE from 'three';
+import { TransformControls } from 'three/addons/controls/TransformControls.js';
+
+const COLOURS = { start: 0x2f7bd8, end: 0xd84f2f };
+
+export class FittingsView {
+  /** onDrag(name, object): the fitting `name` was moved by the gizmo (or by drag()). */
+  constructor(studioScene, onDrag) {
+    this.studioScene = studioScene;
+    this.onDrag = onDrag;
+    this.objects = {};
+    this.group = new THREE.Group();
+    studioScene.scene.add(this.group);
+    for (const name of ['start', 'end']) {
+      const object = new THREE.Group();
+      object.name = `${name} fitting`;
+      this.objects[name] = object;
+      this.group.add(object);
+    }
+    this.gizmo = new TransformControls(studioScene.camera, studioScene.renderer.domElement);
+    this.gizmo.setSpace('local');
+    this.gizmo.setSize(0.8);
+    studioScene.scene.add(this.gizmo.getHelper());
+    this.gizmo.addEventListener('change', () => studioScene.render());
+    this.gizmo.addEventListener('dragging-changed', (event) => {
+      studioScene.orbit.enabled = !event.value;
+      this.dragging = event.value;
+      if (!event.value && this.afterDrag) this.afterDrag();
+    });
+    this.gizmo.addEventListener('objectChange', () => this.onDrag(this.selected, this.objects[this.selected]));
+    this.dragging = false;
+    this.selected = null;
+  }
+
+  /** Size the fitting bodies to the hose (outer diameter, mm); called when a session starts. */
+  build(outerDiameter) {
+    for (const [name, object] of Object.entries(this.objects)) {
+      object.clear();
+      const sign = name === 'start' ? -1 : 1;  // the fitting lies behind the tip: before the start, after the end
+      const length = 3 * outerDiameter;
+      const body = new THREE.Mesh(new THREE.CylinderGeometry(0.75 * outerDiameter, 0.75 * outerDiameter, length, 24),
+        new THREE.MeshStandardMaterial({ color: COLOURS[name], roughness: 0.4, metalness: 0.3 }));
+      body.rotation.x = Math.PI / 2;  // cylinder axis (y) onto z
+      body.position.z = (sign * length) / 2;
+      body.name = `${name} fitting body`;
+      object.add(body, new THREE.AxesHelper(4 * outerDiameter));
+    }
+  }
+
+  /** Put the fittings where a state message has them, except one the user is dragging. */
+  place(fittings) {
+    for (const [name, fitting] of Object.entries(fittings)) {
+      if (this.dragging && name === this.selected) continue;
+      const [w, x, y, z] = fitting.quaternion;
+      this.objects[name].position.fromArray(fitting.point);
+      this.objects[name].quaternion.set(x, y, z, w);
+    }
+  }
+
+  /** Attach the gizmo to 'start', 'end' or nothing (null); mode 'translate' or 'rotate'. */
+  select(name, mode) {
+    if (mode) this.gizmo.setMode(mode);
+    this.selected = name;
+    if (name) this.gizmo.attach(this.objects[name]); else this.gizmo.detach();
+    this.studioScene.render();
+  }
+
+  /** Move fitting `name` by `offset` (mm, world) and turn it by `degrees` about its own `axis` (0 x, 1 y, 2 z),
+   * as a gizmo drag would; for typed values, the benchmark and the tests. */
+  drag(name, offset = [0, 0, 0], axis = 0, degrees = 0) {
+    const object = this.objects[name];
+    object.position.add(new THREE.Vector3(...offset));
+    const local = new THREE.Vector3(); local.setComponent(axis, 1);
+    object.quaternion.multiply(new THREE.Quaternion().setFromAxisAngle(local, THREE.MathUtils.degToRad(degrees)));
+    this.onDrag(name, object);
+  }
+
+  /** Set fitting `name` to a typed tip (mm) or direction (from the fitting into the hose), turning it the least. */
+  setTyped(name, field, values) {
+    const object = this.objects[name];
+    if (field === 'point') {
+      object.position.fromArray(values);
+    } else {
+      const wanted = new THREE.Vector3(...values).normalize();
+      if (name === 'end') wanted.negate();  // the end frame's d3 runs along the hose, out of the end fitting
+      const current = new THREE.Vector3(0, 0, 1).applyQuaternion(object.quaternion);
+      object.quaternion.premultiply(new THREE.Quaternion().setFromUnitVectors(current, wanted));
+    }
+    this.onDrag(name, object);
+  }
+
+  /** A fitting's target for the server: tip (mm) and quaternion [w, x, y, z]. */
+  static target(object) {
+    const q = object.quaternion;
+    return { point: object.position.toArray(), quaternion: [q.w, q.x, q.y, q.z] };
+  }
+}

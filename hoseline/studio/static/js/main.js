@@ -1,0 +1,204 @@
+// The studio page: wires the 3D view, the fittings' gizmo, the panel and the WebSocket together.
+// window.studio exposes the state drawn and a promise per seq, for the tests and the benchmark.
+import * as THREE from 'three';
+import { Connection } from './connection.js';
+import { stationColours } from './colormaps.js';
+import { StudioScene } from './scene.js';
+import { HoseView } from './hose.js';
+import { ObstacleView } from './obstacles.js';
+import { FittingsView } from './fittings.js';
+import { Panel } from './panel.js';
+
+const view = document.getElementById('view');
+const studioScene = new StudioScene(view);
+const hose = new HoseView(studioScene.scene);
+const obstacles = new ObstacleView(studioScene.scene);
+const fittings = new FittingsView(studioScene, (name, object) => send({ type: 'set', [name]: FittingsView.target(object) }));
+let session = null, state = null, starting = true, playing = false;
+const drawnWaiters = [];  // [seq, resolve] waiting for a state at or past seq to be drawn
+const latencies = [];  // ms from a user's event to the shape drawn, one per event
+
+const panel = new Panel({
+  slider: (key, value) => send(key === 'twist' ? { type: 'set', twist: value } : { type: 'set', hose: { [key]: value } }),
+  typed: (name, field, values) => fittings.setTyped(name, field, values),
+  pose: (index) => { playing = false; send({ type: 'set', pose: index }); },
+  play: () => { playing = !playing; if (playing) send({ type: 'set', pose: nextPose() }); },
+  place: () => send({ type: 'place' }),
+  files: (files) => upload([...files]),
+  runSweep,
+});
+const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
+fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings); };
+
+function send(message) {
+  return connection.send(message);
+}
+
+function receive(message) {
+  if (message.type === 'session') {
+    session = message;
+    starting = true;
+    obstacles.load(message.obstacles).then(() => { if (state) fitView(); })
+      .catch((error) => panel.message(String(error), true));
+  } else if (message.type === 'state') {
+    draw(message);
+  } else if (message.type === 'comparison') {
+    if (state) { state.comparison = message.comparison; showSoon(state); }
+  } else if (message.type === 'error') {
+    panel.message(message.message, true);
+    playing = false;
+  }
+}
+
+function draw(message) {
+  state = message;
+  if (starting) {
+    fittings.build(message.hose.outer_diameter);
+    panel.start(session, message);
+  }
+  paint();
+  obstacles.place(message.obstacle_poses);
+  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq) fittings.place(message.fittings);
+  if (starting) { fitView(); starting = false; }
+  studioScene.render();
+  const drawnAt = performance.now();
+  if (message.seq !== null) {
+    for (const sentAt of connection.takeUpTo(message.seq)) latencies.push(drawnAt - sentAt);
+    for (let k = drawnWaiters.length - 1; k >= 0; k--) {
+      if (drawnWaiters[k][0] <= message.seq) { drawnWaiters[k][1](drawnAt); drawnWaiters.splice(k, 1); }
+    }
+  }
+  for (const event of (message.step && message.step.events) || []) panel.message(event);
+  showSoon(message);
+  if (playing && message.seq === connection.seq) send({ type: 'set', pose: nextPose() });
+}
+
+/** Show a state's numbers in the panel at the next animation frame: during a drag the page's layout
+ * is done at most once a frame, however many states arrive. */
+let shownSoon = null;
+function showSoon(message) {
+  if (shownSoon === null) {
+    requestAnimationFrame(() => {
+      panel.show(shownSoon);
+      panel.badge(shownSoon.comparison);
+      shownSoon = null;
+    });
+  }
+  shownSoon = message;
+}
+
+/** Draw the hose of the last state in the colour map chosen. */
+function paint() {
+  const { colours, legend } = stationColours(document.getElementById('colour-map').value, state);
+  hose.update(state, colours);
+  showLegend(legend);
+}
+
+function nextPose() {
+  const next = state && state.pose !== null ? state.pose + 1 : 0;
+  if (next >= session.sweep.poses - 1) playing = false;
+  return Math.min(next, session.sweep.poses - 1);
+}
+
+function fitView() {
+  const box = hose.bounds().union(obstacles.bounds());
+  for (const object of Object.values(fittings.objects)) box.expandByPoint(object.position);
+  studioScene.setGround(box);
+  studioScene.view('iso');
+}
+
+function showLegend(legend) {
+  const element = document.getElementById('legend');
+  element.hidden = !legend;
+  if (!legend) return;
+  const title = document.createElement('div'); title.textContent = legend.title;
+  const bar = document.createElement('div'); bar.className = `bar ${legend.kind}`;
+  const ends = document.createElement('div'); ends.className = 'ends';
+  for (const text of [legend.low, legend.mid, legend.high]) { const span = document.createElement('span'); span.textContent = text; ends.append(span); }
+  element.replaceChildren(title, bar, ends);
+}
+
+/** Upload dropped or chosen files: with a .toml among them, the others are kept for it and it is opened last. */
+async function upload(files) {
+  const main = files.filter((file) => file.name.toLowerCase().endsWith('.toml'));
+  const ordered = main.length ? [...files.filter((file) => !main.includes(file)).map((file) => [file, true]), ...main.map((file) => [file, false])]
+    : files.map((file) => [file, false]);
+  for (const [file, store] of ordered) {
+    try {
+      const response = await fetch(`/upload/${encodeURIComponent(file.name)}${store ? '?store=1' : ''}`, { method: 'POST', body: file });
+      const answer = await response.json();
+      if (response.ok) panel.message(answer.message); else panel.message(answer.error, true);
+    } catch (error) {
+      panel.message(`${file.name}: ${error}`, true);
+    }
+  }
+}
+
+async function runSweep() {
+  panel.message('running the sweep ...');
+  const response = await fetch('/sweep', { method: 'POST' });
+  const answer = await response.json();
+  if (!response.ok) { panel.message(answer.error, true); return; }
+  panel.message('the sweep is done');
+  panel.reportLink(answer.report);
+  window.open(answer.report, '_blank');
+}
+
+document.querySelectorAll('[data-view]').forEach((button) => button.addEventListener('click', () => studioScene.view(button.dataset.view)));
+document.querySelectorAll('[data-select]').forEach((button) => button.addEventListener('click', () => {
+  fittings.select(button.dataset.select === 'none' ? null : button.dataset.select);
+  markActive();
+}));
+document.querySelectorAll('[data-mode]').forEach((button) => button.addEventListener('click', () => {
+  fittings.select(fittings.selected, button.dataset.mode);
+  markActive();
+}));
+function markActive() {
+  document.querySelectorAll('[data-select]').forEach((b) => b.classList.toggle('active', b.dataset.select === (fittings.selected || 'none')));
+  document.querySelectorAll('[data-mode]').forEach((b) => b.classList.toggle('active', b.dataset.mode === fittings.gizmo.mode));
+}
+window.addEventListener('keydown', (event) => {
+  if (event.target.tagName === 'INPUT' || event.target.tagName === 'SELECT') return;
+  if (event.key === 'w') fittings.select(fittings.selected, 'translate');
+  else if (event.key === 'e') fittings.select(fittings.selected, 'rotate');
+  else if (event.key === 'Escape') fittings.select(null);
+  markActive();
+});
+document.getElementById('colour-map').addEventListener('change', () => { if (state) { paint(); studioScene.render(); } });
+
+// a click on a fitting selects it for the gizmo
+const raycaster = new THREE.Raycaster();
+studioScene.renderer.domElement.addEventListener('pointerdown', (event) => {
+  if (fittings.gizmo.axis) return;  // on the gizmo itself
+  const rect = event.target.getBoundingClientRect();
+  const pointer = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1, -((event.clientY - rect.top) / rect.height) * 2 + 1);
+  raycaster.setFromCamera(pointer, studioScene.camera);
+  const hit = raycaster.intersectObjects(fittings.group.children, true)[0];
+  if (!hit) return;
+  let object = hit.object;
+  while (object.parent !== fittings.group) object = object.parent;
+  fittings.select(object === fittings.objects.start ? 'start' : 'end');
+  markActive();
+});
+
+// files may be dropped anywhere on the page (the browser would otherwise open them in place of the studio)
+document.addEventListener('dragover', (event) => { event.preventDefault(); view.classList.add('dropping'); });
+document.addEventListener('dragleave', (event) => { if (!event.relatedTarget) view.classList.remove('dropping'); });
+document.addEventListener('drop', (event) => { event.preventDefault(); view.classList.remove('dropping'); upload([...event.dataTransfer.files]); });
+fittings.select(null, 'translate');
+markActive();
+
+window.studio = {
+  get state() { return state; },
+  latencies,
+  fittings,
+  hose,
+  scene: studioScene,
+  send,
+  /** Resolves with performance.now() when a state at or past `seq` has been drawn. */
+  drawn(seq) { return new Promise((resolve) => drawnWaiters.push([seq, resolve])); },
+  /** performance.now() when the last message from the server arrived. */
+  get receivedAt() { return connection.receivedAt; },
+  /** The seq of the last message sent. */
+  get seq() { return connection.seq; },
+};

@@ -1,0 +1,185 @@
+// The side panel: sliders with exact values, the fittings' numbers, readouts, the sweep timeline,
+// files and messages.  It reports what the user changed through callbacks and shows the states.
+
+// numbers for display: rounding noise (below 1e-9) shown as 0
+const clean = (x) => (Math.abs(x) < 1e-9 ? 0 : Number(x));
+const fmt = (x, digits = 4) => (x === null || x === undefined ? '—' : clean(x).toPrecision(digits));
+const exact = (x) => String(Number(clean(x).toFixed(6)));  // in the number boxes: up to 1e-6
+const norm = (v) => Math.hypot(...v);
+const vector = (v, unit) => `${fmt(norm(v))} ${unit} [${v.map((x) => fmt(x, 3)).join(', ')}]`;
+
+/** A slider's scale: position 0..1000 <-> value, linear or logarithmic between low and high. */
+function scale(low, high, logarithmic) {
+  return logarithmic
+    ? { toValue: (p) => low * (high / low) ** (p / 1000), toPosition: (v) => (1000 * Math.log(v / low)) / Math.log(high / low) }
+    : { toValue: (p) => low + ((high - low) * p) / 1000, toPosition: (v) => (1000 * (v - low)) / (high - low) };
+}
+
+/** The slider ranges round the values a session starts with. */
+function ranges(state) {
+  const h = state.hose;
+  return {
+    length: scale(0.5 * h.length, 2 * h.length, false),
+    twist: scale(-360, 360, false),
+    torsion_factor: scale(Math.min(0.1, h.torsion_factor / 10), Math.max(100, h.torsion_factor * 10), true),
+    bending_stiffness: scale(h.bending_stiffness / 10, h.bending_stiffness * 10, true),
+    mass_per_length: scale(0, Math.max(1, 4 * h.mass_per_length), false),
+  };
+}
+
+const sliderValue = (state, key) => (key === 'twist' ? state.twist : state.hose[key]);
+
+export class Panel {
+  /**
+   * on: { slider(key, value), typed(fitting, field, [x, y, z]), pose(index), play(), place(), files(FileList), runSweep() }
+   */
+  constructor(on) {
+    this.on = on;
+    this.scales = null;
+    for (const div of document.querySelectorAll('.slider')) {
+      const key = div.dataset.key;
+      const [range, number] = div.querySelectorAll('input');
+      range.min = 0; range.max = 1000; range.step = 1;
+      range.addEventListener('input', () => {
+        const value = this.scales[key].toValue(Number(range.value));
+        number.value = exact(value);
+        on.slider(key, value);
+      });
+      number.addEventListener('change', () => {
+        const value = Number(number.value);
+        if (Number.isFinite(value)) on.slider(key, value); else this.message(`${key}: not a number`, true);
+      });
+    }
+    for (const row of document.querySelectorAll('table.fittings tr[data-fitting]')) {
+      for (const input of row.querySelectorAll('input')) {
+        input.addEventListener('change', () => {
+          const values = [...row.querySelectorAll('input')].map((i) => Number(i.value));
+          if (values.every(Number.isFinite)) on.typed(row.dataset.fitting, row.dataset.field, values);
+          else this.message('give three numbers', true);
+        });
+      }
+    }
+    document.getElementById('place-again').addEventListener('click', () => on.place());
+    const pose = document.getElementById('pose');
+    pose.addEventListener('input', () => on.pose(Number(pose.value)));
+    document.getElementById('play').addEventListener('click', () => on.play());
+    document.getElementById('run-sweep').addEventListener('click', () => on.runSweep());
+    document.getElementById('open').addEventListener('change', (event) => on.files(event.target.files));
+  }
+
+  /** A new session: slider ranges round its values, the timeline for its sweep. */
+  start(session, state) {
+    this.scales = ranges(state);
+    document.getElementById('problem-name').textContent = session.name;
+    const timeline = document.getElementById('timeline');
+    timeline.hidden = !session.sweep;
+    if (session.sweep) {
+      const pose = document.getElementById('pose');
+      pose.max = session.sweep.poses - 1;
+      pose.value = 0;
+    }
+    this.session = session;
+  }
+
+  /** Show a state message: values, fittings, readouts. */
+  show(state) {
+    for (const div of document.querySelectorAll('.slider')) {
+      const key = div.dataset.key;
+      const [range, number] = div.querySelectorAll('input');
+      const value = sliderValue(state, key);
+      if (document.activeElement !== range) range.value = Math.round(this.scales[key].toPosition(value));
+      if (document.activeElement !== number) number.value = exact(value);
+    }
+    for (const row of document.querySelectorAll('table.fittings tr[data-fitting]')) {
+      const fitting = state.fittings[row.dataset.fitting];
+      const values = row.dataset.field === 'point' ? fitting.point : direction(row.dataset.fitting, fitting.quaternion);
+      row.querySelectorAll('input').forEach((input, k) => {
+        if (document.activeElement !== input) input.value = exact(values[k]);
+      });
+    }
+    if (state.pose !== null && this.session && this.session.sweep) {
+      const pose = document.getElementById('pose');
+      if (document.activeElement !== pose) pose.value = state.pose;
+      document.getElementById('pose-label').textContent = poseLabel(this.session.sweep, state.pose);
+    }
+    this.readouts(state);
+  }
+
+  readouts(state) {
+    const r = state.readouts, rows = [];
+    for (const near of r.min_clearance) {
+      const ok = near.distance >= near.required;
+      rows.push([`clearance to ${near.name}`, `${fmt(near.distance)} mm (required ${fmt(near.required)}) at s = ${fmt(near.s)} mm`, ok]);
+    }
+    if (!r.min_clearance.length) rows.push(['clearance', 'no obstacles', null]);
+    const limit = state.hose.min_bend_radius;
+    rows.push(['min bend radius', `${fmt(r.min_bend_radius)} mm${limit ? ` (minimum ${fmt(limit)})` : ''}`,
+      limit ? r.min_bend_radius === null || r.min_bend_radius >= limit : null]);
+    rows.push(['start reaction', [vector(r.start_force, 'N'), vector(r.start_moment, 'N·mm')], null]);
+    rows.push(['end reaction', [vector(r.end_force, 'N'), vector(r.end_moment, 'N·mm')], null]);
+    rows.push(['max twisting moment', `${fmt(r.max_twisting_moment)} N·mm`, null]);
+    rows.push(['lock angle (placement)', `${fmt(r.lock_angle)}°`, null]);
+    rows.push(['single-plane offset', r.single_plane_offset === null ? 'undefined (parallel directions)' : `${fmt(r.single_plane_offset)} mm`, null]);
+    rows.push(['stability margin', `${fmt(r.stability_margin)} N/rad²`, r.stability_margin >= 0]);
+    const comparison = state.comparison;
+    const known = comparison && !comparison.failed;
+    rows.push(['unique (placement)', known ? (comparison.unique ? 'yes' : 'no: another stable shape exists') : 'not known', known ? comparison.unique : null]);
+    if (state.step) rows.push(['last step', `${state.step.iterations} Newton iterations, ${fmt(1000 * state.step.seconds, 2)} ms, moved ${fmt(state.step.movement, 3)} mm`, null]);
+    const table = document.getElementById('readouts');
+    table.replaceChildren(...rows.map(([name, value, ok]) => {
+      const tr = document.createElement('tr');
+      const th = document.createElement('td'); th.textContent = name;
+      const td = document.createElement('td');
+      [value].flat().forEach((line, k) => td.append(...(k ? [document.createElement('br')] : []), line));
+      if (ok !== null) td.className = ok ? 'good' : 'bad';
+      tr.append(th, td);
+      return tr;
+    }));
+  }
+
+  /** The badge: is the shape shown what a fresh placement gives? */
+  badge(comparison) {
+    const badge = document.getElementById('badge');
+    if (!comparison) {
+      badge.className = 'badge pending'; badge.textContent = 'placement: checking'; badge.title = '';
+    } else if (comparison.failed) {
+      badge.className = 'badge differs'; badge.textContent = 'a fresh placement fails here'; badge.title = comparison.failed;
+    } else if (comparison.same) {
+      badge.className = 'badge same'; badge.textContent = 'same as a fresh placement';
+      badge.title = 'placing this problem afresh from the straight hose gives the shape shown';
+    } else {
+      badge.className = 'badge differs';
+      badge.textContent = `a fresh placement differs by ${fmt(comparison.distance, 3)} mm`;
+      badge.title = comparison.clocking > 1e-6
+        ? `the end fitting is clocked ${fmt(comparison.clocking, 3)}° from where a fresh assembly locks it: the hose was moved after assembly (it keeps its locked twist). "Place again" assembles it here.`
+        : 'same fittings, another shape: the path reached another branch. "Place again" gives the placement\'s branch.';
+    }
+  }
+
+  message(text, error = false) {
+    const list = document.getElementById('messages');
+    const item = document.createElement('li');
+    item.textContent = text;
+    if (error) item.className = 'error';
+    list.prepend(item);
+    while (list.children.length > 50) list.lastChild.remove();
+    document.getElementById('status').textContent = text;
+  }
+
+  reportLink(url) {
+    const link = document.createElement('a');
+    link.href = url; link.target = '_blank'; link.textContent = 'open the report';
+    document.getElementById('report-link').replaceChildren(link);
+  }
+}
+
+/** The direction from a fitting into the hose: d3 of the start frame, -d3 of the end frame. */
+function direction(name, [w, x, y, z]) {
+  const d3 = [2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)];
+  return name === 'end' ? d3.map((v) => -v) : d3;
+}
+
+function poseLabel(sweep, index) {
+  const stage = sweep.stages.find((s) => index >= s.first && index < s.first + s.count) || { name: 'travel', unit: '' };
+  return `pose ${index} of ${sweep.poses - 1}: ${stage.name} = ${fmt(sweep.travel[index])} ${stage.unit}`;
+}

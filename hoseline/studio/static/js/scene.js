@@ -1,0 +1,93 @@
+// The 3D view: renderer, camera (z up, as the problem files' gravity), orbit/pan/zoom, a ground
+// grid and axes, view presets.  It draws on demand (after a change), not in a loop.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+const PRESETS = {
+  iso: new THREE.Vector3(1, -1, 0.8),
+  top: new THREE.Vector3(0, -1e-3, 1),
+  front: new THREE.Vector3(0, -1, 0),
+  side: new THREE.Vector3(1, 0, 0),
+};
+
+/** Whether WebGL here runs on the CPU (no GPU driver), from the unmasked renderer name. */
+function softwareRendering() {
+  const gl = document.createElement('canvas').getContext('webgl2');
+  const info = gl && gl.getExtension('WEBGL_debug_renderer_info');
+  const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
+  gl?.getExtension('WEBGL_lose_context')?.loseContext();
+  return /swiftshader|llvmpipe|software/i.test(name);
+}
+
+export class StudioScene {
+  constructor(container) {
+    this.container = container;
+    // multisampling costs a software renderer (no GPU: SwiftShader, llvmpipe) more than twice the frame time
+    this.renderer = new THREE.WebGLRenderer({ antialias: !softwareRendering() });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+    this.renderer.setClearColor(0xf3f5f7);
+    container.prepend(this.renderer.domElement);
+    this.scene = new THREE.Scene();
+    this.camera = new THREE.PerspectiveCamera(35, 1, 1, 1e5);
+    this.camera.up.set(0, 0, 1);
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x8090a0, 2.0));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(1, -2, 3);
+    this.scene.add(sun);
+    this.orbit = new OrbitControls(this.camera, this.renderer.domElement);
+    this.orbit.addEventListener('change', () => this.render());
+    this.ground = new THREE.Group();
+    this.scene.add(this.ground);
+    this.drawCount = 0;
+    new ResizeObserver(() => this.resize()).observe(container);
+    this.resize();
+  }
+
+  resize() {
+    const { clientWidth: width, clientHeight: height } = this.container;
+    if (width === 0 || height === 0) return;
+    this.renderer.setSize(width, height, false);
+    this.camera.aspect = width / height;
+    this.camera.updateProjectionMatrix();
+    this.render();
+  }
+
+  render() {
+    this.renderer.render(this.scene, this.camera);
+    this.drawCount += 1;
+  }
+
+  /** A ground grid below `box` (THREE.Box3, mm) and axes at the origin, sized to it. */
+  setGround(box) {
+    this.ground.clear();
+    const size = box.getSize(new THREE.Vector3());
+    const extent = Math.max(size.x, size.y, size.z, 1);
+    const step = 10 ** Math.floor(Math.log10(extent / 5));
+    const span = Math.ceil((2 * extent) / step) * step;
+    const grid = new THREE.GridHelper(span, Math.round(span / step), 0x9aa7b5, 0xd0d7de);
+    grid.rotation.x = Math.PI / 2;  // GridHelper lies in xz; the ground is the xy plane
+    const centre = box.getCenter(new THREE.Vector3());
+    grid.position.set(Math.round(centre.x / step) * step, Math.round(centre.y / step) * step, box.min.z - 0.1 * extent);
+    this.ground.add(grid);
+    const axes = new THREE.AxesHelper(0.25 * extent);
+    this.ground.add(axes);
+    this.bounds = box.clone();
+  }
+
+  /** Look at the bounds from a preset direction (iso, top, front, side) or keep the direction (fit). */
+  view(name) {
+    if (!this.bounds) return;
+    const centre = this.bounds.getCenter(new THREE.Vector3());
+    const radius = Math.max(this.bounds.getSize(new THREE.Vector3()).length() / 2, 1);
+    const direction = name in PRESETS ? PRESETS[name].clone().normalize()
+      : this.camera.position.clone().sub(this.orbit.target).normalize();
+    const distance = radius / Math.sin(THREE.MathUtils.degToRad(this.camera.fov / 2)) * Math.max(1, 1 / this.camera.aspect);
+    this.camera.position.copy(centre).addScaledVector(direction, distance);
+    this.camera.near = distance / 100;
+    this.camera.far = distance * 100;
+    this.camera.updateProjectionMatrix();
+    this.orbit.target.copy(centre);
+    this.orbit.update();
+    this.render();
+  }
+}

@@ -1,0 +1,167 @@
+"""What the page is sent: the shape, the fittings, the colour-map data along the hose and the readouts.
+
+Units as everywhere at the user boundary: mm, N, N*mm, degrees, kg/m.  Numbers that are not
+finite (the bend radius of a straight station) are sent as null, since JSON has no infinity.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from hoseline.model.motion import matrix_quaternion
+from hoseline.procedures.geometry.clearance_profile import clearance_profile
+from hoseline.procedures.placement.result import Result
+
+if TYPE_CHECKING:
+    from hoseline.studio.session import Session
+
+SAME_SHAPE = 1e-6  # of the length: a fresh placement closer than this is the shape shown
+CLEARANCE_SCALE = 2.0  # the clearance colour map runs from 0 to this many times the required clearance
+
+
+def state_message(session: "Session") -> dict:
+    """The "state" message: everything the page draws after a change."""
+    result = session.result()
+    problem = session.problem
+    radius = problem.hose.outer_radius
+    clearance, nearest = _clearances(session, result.centerline, radius)
+    with np.errstate(divide="ignore"):
+        bend_radius = 1.0 / result.curvature - radius
+    step = session.last_step
+    fittings = session.fittings_at_zero_twist()
+    return {
+        "type": "state",
+        "centerline": result.centerline.tolist(),
+        "lay_line": _station_d1(result).tolist(),
+        "s": result.s.tolist(),
+        "bend_radius": _finite_or_none(bend_radius),
+        "twisting_moment": result.twisting_moment.tolist(),
+        "clearance_ratio": None if clearance is None else clearance.tolist(),
+        "fittings": {
+            "start": {"point": fittings.start_point.tolist(), "quaternion": _quaternion(fittings.start_frame)},
+            "end": {"point": fittings.end_point.tolist(), "quaternion": _quaternion(fittings.end_frame)},
+        },
+        "twist": problem.end_twist_deg,
+        "hose": {
+            "length": problem.hose.length,
+            "outer_diameter": problem.hose.outer_diameter,
+            "bending_stiffness": problem.hose.bending_stiffness,
+            "torsion_factor": problem.hose.torsion_factor,
+            "mass_per_length": problem.hose.mass_per_length,
+            "min_bend_radius": problem.hose.min_bend_radius,
+            "segments": problem.hose.segments,
+        },
+        "obstacle_poses": [_matrix(session.obstacle_pose(shown)) for shown in session.obstacles],
+        "pose": session.pose_index,
+        "readouts": {
+            "min_clearance": nearest,
+            "min_bend_radius": _finite_or_none(result.min_bend_radius),
+            "start_force": result.start_force.tolist(),
+            "start_moment": result.start_moment.tolist(),
+            "end_force": result.end_force.tolist(),
+            "end_moment": result.end_moment.tolist(),
+            "lock_angle": session.placement.lock_angle_deg,
+            "single_plane_offset": result.single_plane_offset,
+            "stability_margin": result.stability_margin,
+            "max_twisting_moment": result.max_twisting_moment,
+        },
+        "step": None if step is None else {
+            "iterations": step.iterations, "seconds": step.seconds, "events": step.events, "movement": step.movement,
+        },
+        "comparison": session.comparison,
+    }
+
+
+def session_message(session: "Session") -> dict:
+    """The "session" message: what changes only when a file is opened (names, obstacles, the sweep's timeline)."""
+    sweep = session.sweep
+    return {
+        "type": "session",
+        "revision": session.revision,
+        "name": session.problem.name,
+        "obstacles": [
+            {"id": k, "name": s.obstacle.name, "required": s.obstacle.clearance, "triangles": int(len(s.obstacle.faces)),
+             "body": s.obstacle.body}
+            for k, s in enumerate(session.obstacles)
+        ],
+        "sweep": None if sweep is None else {
+            "poses": sweep.pose_count,
+            "travel": sweep.travel.tolist(),
+            "stages": [{"name": st.name, "unit": st.unit, "first": st.first, "count": st.count} for st in sweep.stages],
+        },
+    }
+
+
+def placement_comparison(centerline: np.ndarray, end_frame: np.ndarray, placement: Result) -> dict:
+    """How a fresh placement of the same problem differs from the shape shown.
+
+    distance: mm, largest distance between stations.  clocking: degrees between the end
+    fitting frames (non-zero when the hose was moved after assembly: its end keeps the roll it
+    was locked at, a fresh assembly locks another).  same: within SAME_SHAPE of the length.
+    (Session.compare_with_placement says {"same": False, "failed": why} when a fresh placement fails.)
+    """
+    distance = float(np.max(np.linalg.norm(placement.centerline - centerline, axis=1)))
+    cosine = 0.5 * (float(np.trace(placement.end_frame.T @ end_frame)) - 1.0)  # of the angle between the frames
+    clocking = math.degrees(math.acos(min(1.0, max(-1.0, cosine))))
+    return {
+        "distance": distance,
+        "clocking": clocking,
+        "same": distance <= SAME_SHAPE * placement.problem.hose.length,
+        "unique": placement.unique,
+        "lock_angle": placement.lock_angle_deg,
+        "events": list(placement.events),
+    }
+
+
+def _clearances(session: "Session", nodes: np.ndarray, radius: float):
+    """Per station the least clearance ratio over the obstacles (distance / required, up to CLEARANCE_SCALE),
+    and per obstacle its nearest approach; (None, []) without obstacles."""
+    if not session.obstacles:
+        return None, []
+    ratio = np.full(len(nodes), CLEARANCE_SCALE)
+    nearest = []
+    for shown in session.obstacles:
+        pose = session.obstacle_pose(shown)
+        local = pose.inverse().points(nodes)
+        required = shown.obstacle.clearance
+        scale = max(required, 1e-3 * session.problem.hose.length)  # a zero requirement: colour by distance
+        segments = clearance_profile(shown.index, local, radius, CLEARANCE_SCALE * scale) / scale
+        stations = np.minimum(np.append(segments, segments[-1]), np.insert(segments, 0, segments[0]))
+        ratio = np.minimum(ratio, stations)
+        found = shown.index.nearest(local, radius)
+        nearest.append({"name": shown.obstacle.name, "distance": found.distance, "required": required, "s": found.s})
+    return ratio, nearest
+
+
+def _station_d1(result: Result) -> np.ndarray:
+    """(N+1, 3) the section axis d1 at the stations (fitting frames at the ends, the mean of the two
+    segments' elsewhere, made normal to the tangent): the lay line that shows the twist."""
+    d1 = np.vstack([result.start_frame[0][None], result.frames[:, 0], result.end_frame[0][None]])
+    tangents = np.vstack([result.start_frame[2][None], result.frames[:, 2], result.end_frame[2][None]])
+    axis = d1[:-1] + d1[1:]
+    tangent = tangents[:-1] + tangents[1:]
+    tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+    axis -= np.einsum("ij,ij->i", axis, tangent)[:, None] * tangent
+    return axis / np.linalg.norm(axis, axis=1)[:, None]
+
+
+def _quaternion(frame: np.ndarray) -> list[float]:
+    """Unit quaternion (w, x, y, z) turning the world axes onto a fitting frame's d1, d2, d3."""
+    return matrix_quaternion(np.asarray(frame).T).tolist()
+
+
+def _matrix(pose) -> list[float]:
+    """A pose as a 4x4 matrix, row by row (mm)."""
+    matrix = np.eye(4)
+    matrix[:3, :3], matrix[:3, 3] = pose.rotation, pose.position
+    return matrix.ravel().tolist()
+
+
+def _finite_or_none(values):
+    """Numbers, with inf and NaN as None (JSON has neither)."""
+    if np.ndim(values) == 0:
+        return float(values) if math.isfinite(values) else None
+    return [float(v) if math.isfinite(v) else None for v in np.asarray(values, dtype=float)]

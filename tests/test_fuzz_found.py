@@ -1,0 +1,96 @@
+"""The bad inputs of issue 9 (and what the fuzzer found): each refused with exit 2, its place named, nothing written."""
+
+import pytest
+from cases import THESIS_TOML, write
+from typer.testing import CliRunner
+
+from hoseline import cli
+from hoseline.commands import common
+from hoseline.procedures.placement import sequence
+from hoseline.procedures.sweep import quasi_static
+
+SWEEP_TOML = THESIS_TOML.replace("[end]\n", '[end]\nbody = "knuckle"\n') + """
+[[bodies]]
+name = "knuckle"
+poses = "knuckle.csv"
+"""
+HEADER = "jounce [mm], x, y, z, qw, qx, qy, qz\n"
+
+
+def run(*args):
+    """Exit code and output of the CLI run in-process; a traceback fails the test."""
+    result = CliRunner().invoke(cli.app, [str(a) for a in args], catch_exceptions=False)
+    return result.exit_code, result.output
+
+
+@pytest.fixture
+def no_solving(monkeypatch):
+    """Fail the test if the solver is reached: bad input must be refused before any solving."""
+
+    def solve(*args, **options):
+        raise AssertionError("the solver ran on input that should have been refused")
+
+    monkeypatch.setattr(quasi_static, "run_sweep", solve)
+    monkeypatch.setattr(sequence, "solve", solve)
+
+
+@pytest.mark.parametrize(
+    "rows, fragments",
+    [
+        ("0, 0, 0, 0, 1, 0, 0, 0\n1, 0, 0, 1e300, 1, 0, 0, 0\n", ["knuckle.csv line 3, column z", "1e+300", "100000 mm"]),
+        ("0, 0, 0, 0, 1, 0, 0, 0\n1e300, 0, 0, 0, 1, 0, 0, 0\n", ["knuckle.csv line 3, column jounce [mm]", "1e+300"]),
+        # pose 4 moves the end mount 2000 mm: refused before solving, naming the pose, both numbers and the fix
+        ("0, 0, 0, 0, 1, 0, 0, 0\n5, 0, 0, 5, 1, 0, 0, 0\n10, 0, 0, 10, 1, 0, 0, 0\n15, 0, 0, 15, 1, 0, 0, 0\n"
+         "2000, -2000, 0, 0, 1, 0, 0, 0\n",
+         ["at pose 4 (jounce = 2000 mm)", "the mounts are 2160.",  "mm apart and the hose is 330.6 mm long",
+          "use a hose longer than 2160."]),
+    ],
+    ids=["translation 1e300", "travel 1e300", "mounts 2160 mm apart at pose 4"],
+)
+def test_pose_tables_out_of_range_or_reach_exit_2_before_solving(tmp_path, no_solving, rows, fragments):
+    write(tmp_path / "knuckle.csv", HEADER + rows)
+    code, output = run("sweep", write(tmp_path / "sweep.toml", SWEEP_TOML), "-o", tmp_path / "out", "-q")
+    assert code == common.BAD_INPUT, output
+    for fragment in fragments:
+        assert fragment in output
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_generated_stage_out_of_reach_is_named_by_its_travel(tmp_path, no_solving):
+    text = THESIS_TOML.replace("[end]\n", '[end]\nbody = "knuckle"\n') + """
+[[bodies]]
+name = "knuckle"
+stages = [{ name = "jounce", translate = [0.0, 400.0], axis = [0, 0, 1], steps = 4 }]
+"""
+    code, output = run("sweep", write(tmp_path / "sweep.toml", text), "-o", tmp_path / "out", "-q")
+    assert code == common.BAD_INPUT
+    assert "at pose 3 (jounce = 300 mm) the mounts are 340.102 mm apart" in output  # |(160.064, 7, 300)| > 330.6
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_output_folder_name_too_long_for_the_file_system_exits_2(tmp_path, no_solving):
+    out = tmp_path / ("x" * 300)
+    code, output = run("solve", write(tmp_path / "brake.toml", THESIS_TOML), "-o", out, "-q")
+    assert code == common.BAD_INPUT
+    assert "cannot write to" in output and "File name too long" in output and "shorter -o" in output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["brake.toml"]
+
+
+@pytest.mark.parametrize("value", ["1e308", "1e15", "-100001"])
+def test_coordinates_out_of_any_sensible_range_exit_2(tmp_path, no_solving, value):
+    text = THESIS_TOML.replace("[-173.064, -7.0, -11.25]", f"[{value}, -7.0, -11.25]")
+    code, output = run("solve", write(tmp_path / "brake.toml", text), "-o", tmp_path / "out", "-q")
+    assert code == common.BAD_INPUT
+    assert "end.point = [" in output and "within +-100000 mm" in output
+    assert "mount distance" not in output  # not taken as a number and compared with the hose
+    assert not (tmp_path / "out").exists()
+
+
+def test_iges_points_out_of_range_are_named_by_label(tmp_path, no_solving):
+    from fuzz_cases import IGES_FILE, IGES_PROBLEM
+
+    iges = IGES_FILE.read_text().replace("116,-173.064,-7.0,-11.25,0;", "116,-1.73E15,-7.0,-11.25,0;")
+    write(tmp_path / "mounts.igs", iges)
+    code, output = run("solve", write(tmp_path / "problem.toml", IGES_PROBLEM.decode()), "-o", tmp_path / "out", "-q")
+    assert code == common.BAD_INPUT, output
+    assert "mounts.iges" in output and "point D at (-1.73e+15, -7, -11.25) mm lies outside +-100000 mm" in output

@@ -1,0 +1,310 @@
+"""The studio's server: the WebSocket protocol, continuation steps, coalescing of drag bursts, uploads and limits."""
+
+import asyncio
+import json
+import re
+import time
+import tomllib
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from starlette.testclient import TestClient
+
+from hoseline.demos.sweep import demo_sweep
+from hoseline.demos.thesis_hose import THESIS_MOUNTS_IGES, demo_problem
+from hoseline.io.problem_file import problem_from_dict, problem_to_toml
+from hoseline.procedures.placement.sequence import solve
+from hoseline.studio.inbox import Inbox
+from hoseline.studio.messages import parse_message
+from hoseline.studio.server import create_app
+from hoseline.studio.session import Session
+from hoseline.studio.uploads import SIZE_LIMITS
+
+HOSTS = ("testserver",)
+SEGMENTS = 30
+
+
+@pytest.fixture(scope="module")
+def problem():
+    return demo_problem(180.0, segments=SEGMENTS)
+
+
+@pytest.fixture
+def client(problem, tmp_path):
+    app = create_app(Session(problem), tmp_path, allowed_hosts=HOSTS)
+    with TestClient(app) as test_client:
+        yield test_client
+
+
+def opened(ws):
+    """The session and state messages a page gets on connecting."""
+    session, state = ws.receive_json(), ws.receive_json()
+    assert (session["type"], state["type"]) == ("session", "state")
+    return session, state
+
+
+def next_state(ws):
+    """The next state message (errors and comparisons on the way are returned with it)."""
+    others = []
+    while True:
+        message = ws.receive_json()
+        if message["type"] == "state":
+            return message, others
+        others.append(message)
+
+
+def moved_end(state, offset):
+    """A target moving the end fitting by `offset` (mm), its orientation kept."""
+    end = state["fittings"]["end"]
+    return {"type": "set", "end": {"point": (np.array(end["point"]) + offset).tolist(), "quaternion": end["quaternion"]}}
+
+
+def test_first_state_is_the_placement_and_a_drag_is_a_reversible_continuation_path(client, problem):
+    placed = solve(problem).centerline
+    with client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        assert np.max(np.abs(np.array(state["centerline"]) - placed)) < 1e-9 * problem.hose.length
+        assert state["comparison"]["same"] and state["seq"] is None
+        start = np.array(state["centerline"])
+        for k in range(1, 11):  # drag the end fitting 10 mm up in steps of 1 mm
+            ws.send_json({**moved_end(state, [0.0, 0.0, float(k)]), "seq": k})
+            moved, _ = next_state(ws)
+            assert moved["seq"] == k
+        shape = np.array(moved["centerline"])
+        assert np.allclose(shape[-1], start[-1] + [0.0, 0.0, 10.0], atol=1e-9)  # the hose ends at the dragged tip
+        assert np.max(np.linalg.norm(shape - start, axis=1)) > 5.0
+        assert moved["step"]["iterations"] >= 1
+        assert abs(np.sum(np.linalg.norm(np.diff(shape, axis=0), axis=1)) - problem.hose.length) < 1e-9  # inextensible
+        ws.send_json({**moved_end(state, [0.0, 0.0, 0.0]), "seq": 11})  # and back: the same equilibrium again
+        back, _ = next_state(ws)
+        assert np.max(np.abs(np.array(back["centerline"]) - start)) < 1e-6 * problem.hose.length
+
+
+def test_sliders_change_the_hose_through_the_problem_file_checks(client, problem):
+    with client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        ws.send_json({"type": "set", "seq": 1, "hose": {"length": 360.0}, "twist": 90.0})
+        longer, _ = next_state(ws)
+        shape = np.array(longer["centerline"])
+        assert abs(np.sum(np.linalg.norm(np.diff(shape, axis=0), axis=1)) - 360.0) < 1e-9
+        assert longer["twist"] == 90.0 and longer["hose"]["length"] == 360.0
+        ws.send_json({"type": "set", "seq": 2, "hose": {"length": 100.0}})  # shorter than the mount distance
+        kept, others = next_state(ws)
+        assert [m["type"] for m in others] == ["error"] and "hose.length" in others[0]["message"]
+        assert kept["seq"] == 2 and kept["centerline"] == longer["centerline"]
+        ws.send_json({"type": "set", "seq": 3, "hose": {"torsion_factor": -1.0}})
+        _, others = next_state(ws)
+        assert "torsion_factor" in others[0]["message"]  # the problem file's own message
+
+
+def test_a_burst_of_drag_events_is_coalesced_the_latest_target_wins(client, monkeypatch):
+    session = client.app.state.studio.session
+    apply = session.apply
+
+    def slow_apply(target):  # a slow solver: a burst arrives while one step runs
+        time.sleep(0.05)
+        apply(target)
+
+    monkeypatch.setattr(session, "apply", slow_apply)
+    with client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        burst = 20
+        for k in range(1, burst + 1):
+            ws.send_json({**moved_end(state, [0.0, 0.0, 0.5 * k]), "seq": k})
+        states = []
+        while not states or states[-1]["seq"] != burst:
+            states.append(next_state(ws)[0])
+        assert len(states) <= 4  # not one solve per event
+        assert client.app.state.studio.coalesced >= burst - 4
+        last = np.array(states[-1]["fittings"]["end"]["point"])
+        assert np.allclose(last, np.array(state["fittings"]["end"]["point"]) + [0.0, 0.0, 0.5 * burst])
+
+
+def test_the_inbox_merges_only_consecutive_targets():
+    async def drain():
+        inbox = Inbox()
+        messages = [{"type": "set", "seq": 1, "twist": 10.0}, {"type": "set", "seq": 2, "hose": {"length": 340.0}},
+                    {"type": "place", "seq": 3}, {"type": "set", "seq": 4, "twist": 20.0}]
+        for message in messages:
+            inbox.put(parse_message(json.dumps(message)))
+        return [await inbox.get(0.01) for _ in range(4)], inbox.coalesced
+
+    (first, command, last, empty), coalesced = asyncio.run(drain())
+    assert (first.seq, first.twist, first.hose.length) == (2, 10.0, 340.0)  # both changes of the burst kept
+    assert command.type == "place" and last.twist == 20.0 and empty is None and coalesced == 1
+
+
+def test_bad_messages_get_an_answer_and_the_loop_goes_on(client):
+    with client.websocket_connect("/ws") as ws:
+        opened(ws)
+        ws.send_text("not json")
+        assert ws.receive_json()["type"] == "error"
+        ws.send_json({"type": "set", "seq": 1, "end": {"point": [0, 0], "quaternion": [1, 0, 0, 0]}})
+        assert "end.point" in ws.receive_json()["message"]
+        ws.send_text(json.dumps({"type": "set", "seq": 2, "twist": 1.0, "pad": "x" * 70000}))
+        assert "more than" in ws.receive_json()["message"]
+        ws.send_json({"type": "place", "seq": 3})
+        placed, _ = next_state(ws)
+        assert placed["seq"] == 3 and placed["comparison"]["same"]
+
+
+def test_uploads_are_limited_and_checked_by_the_command_line_readers(client, problem):
+    before = client.get("/problem.toml").text
+    too_large = client.post("/upload/big.stl", content=b"x" * 10, headers={"content-length": str(SIZE_LIMITS["obstacle"] + 1)})
+    assert too_large.status_code == 413 and "64 MiB" in too_large.json()["error"]
+    assert client.post("/upload/x.exe", content=b"MZ").status_code == 415
+    for name in (".hidden.toml", "two%20words.toml", "..%2F..%2Fescape.toml"):  # no paths, no odd names
+        assert client.post(f"/upload/{name}", content=b"").status_code in (404, 415)
+    text = re.sub(r"length = [0-9.]+", "length = -1.0", problem_to_toml(problem), count=1)
+    bad = client.post("/upload/bad.toml", content=text.encode())
+    assert bad.status_code == 400 and "hose.length = -1.0" in bad.json()["error"]
+    broken = client.post("/upload/broken.stl", content=b"solid nothing\nendsolid\n")
+    assert broken.status_code == 400 and "broken.stl" in broken.json()["error"]
+    assert client.get("/problem.toml").text == before  # the session is untouched
+
+
+def test_opened_files_replace_the_problem_and_add_obstacles(client, problem, tmp_path):
+    mine = replace(problem, name="uploaded", end_twist_deg=0.0)
+    assert client.post("/upload/mine.toml", content=problem_to_toml(mine).encode()).status_code == 200
+    assert problem_from_dict(tomllib.loads(client.get("/problem.toml").text)).end_twist_deg == 0.0
+    with open(THESIS_MOUNTS_IGES, "rb") as stream:
+        assert client.post("/upload/mounts.igs", content=stream.read()).status_code == 200
+    strut = demo_sweep(steps_per_degree=0.1, segments=SEGMENTS).obstacles[0]
+    import trimesh
+    stl = trimesh.Trimesh(strut.vertices, strut.faces).export(file_type="stl")
+    assert client.post("/upload/strut.stl", content=stl).status_code == 200
+    with client.websocket_connect("/ws") as ws:
+        session, state = opened(ws)
+        assert session["name"] == "uploaded" and [o["name"] for o in session["obstacles"]] == ["strut"]
+        near = state["readouts"]["min_clearance"][0]
+        assert near["required"] == 25.4 and abs(near["distance"] - 26.4) < 1.0
+        assert len(state["clearance_ratio"]) == SEGMENTS + 1 and min(state["clearance_ratio"]) < 2.0
+    mesh = client.get("/obstacle/0").content
+    vertices, faces = np.frombuffer(mesh[:8], "<u4")
+    assert len(mesh) == 8 + 12 * vertices + 12 * faces and faces == len(strut.faces)
+
+
+def test_the_problem_file_and_exports_are_of_the_shape_shown(client, problem, tmp_path):
+    with client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        ws.send_json({**moved_end(state, [0.0, 0.0, 5.0]), "seq": 1})
+        moved, _ = next_state(ws)
+    saved = problem_from_dict(tomllib.loads(client.get("/problem.toml").text))
+    assert np.allclose(saved.end.point, moved["fittings"]["end"]["point"], atol=1e-12)
+    cmd = client.get("/export/adams")
+    assert cmd.status_code == 200 and "hose.cmd" in cmd.headers["content-disposition"]
+    path = tmp_path / "hose.cmd"
+    path.write_bytes(cmd.content)
+    from hoseline.io.adams_cmd import hose_from_adams, read_adams_cmd
+    stations, _ = hose_from_adams(read_adams_cmd(path))
+    assert np.max(np.abs(stations - np.array(moved["centerline"]))) < 1e-6 * problem.hose.length
+    assert client.get("/export/nonsense").status_code == 404
+
+
+def test_the_timeline_moves_the_fittings_with_the_sweep_bodies_and_runs_the_sweep(tmp_path):
+    sweep = demo_sweep(steps_per_degree=0.1, segments=SEGMENTS)
+    sweep = replace(sweep, compare_free_roll=False)
+    app = create_app(Session(sweep=sweep), tmp_path, allowed_hosts=HOSTS)
+    with TestClient(app) as client, client.websocket_connect("/ws") as ws:
+        session, state = opened(ws)
+        assert session["sweep"]["poses"] == sweep.pose_count
+        k = 3
+        ws.send_json({"type": "set", "seq": 1, "pose": k})
+        posed, _ = next_state(ws)
+        expected = sweep.pose(sweep.end_body, k).point(sweep.problem.end.point)
+        assert posed["pose"] == k and np.allclose(posed["fittings"]["end"]["point"], expected, atol=1e-9)
+        assert np.allclose(posed["centerline"][-1], expected, atol=1e-9)
+        ran = client.post("/sweep")
+        assert ran.status_code == 200
+        report = client.get(ran.json()["report"])
+        assert report.status_code == 200 and "<html" in report.text.lower()
+        assert client.get("/reports/0/../../etc/passwd").status_code == 404
+
+
+def test_requests_from_other_origins_and_hosts_are_refused(client):
+    refused = client.post("/upload/a.toml", content=b"", headers={"origin": "http://evil.example"})
+    assert refused.status_code == 403
+    assert client.get("/", headers={"host": "evil.example"}).status_code == 400
+    with pytest.raises(Exception):
+        with client.websocket_connect("/ws", headers={"origin": "http://evil.example"}) as ws:
+            ws.receive_json()
+    page = client.get("/")
+    assert "connect-src 'self'" in page.headers["content-security-policy"]
+
+
+def test_the_command_refuses_bad_input_and_serves_until_interrupted(problem, tmp_path):
+    import signal
+    import socket
+    import subprocess
+    import sys
+    import urllib.request
+    from pathlib import Path
+
+    from typer.testing import CliRunner
+
+    from hoseline.cli import app
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[hose]\nlength = -1\n")
+    runner = CliRunner()
+    assert runner.invoke(app, ["studio", str(bad), "--no-browser"]).exit_code == 2
+    assert runner.invoke(app, ["studio", "--port", "70000", "--no-browser"]).exit_code == 2
+    assert runner.invoke(app, ["studio", str(tmp_path / "none.toml"), "--no-browser"]).exit_code == 2
+    good = tmp_path / "problem.toml"
+    good.write_text(problem_to_toml(problem))
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        busy = runner.invoke(app, ["studio", str(good), "--port", str(taken.getsockname()[1]), "--no-browser"])
+        assert busy.exit_code == 2 and "cannot listen" in busy.output
+    command = [str(Path(sys.executable).with_name("hoseline")), "studio", str(good), "--port", "0", "--no-browser"]
+    server = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    try:
+        line = server.stderr.readline()
+        url = line.split(" at ", 1)[1].split()[0]
+        assert url.startswith("http://127.0.0.1:")
+        for _ in range(100):  # uvicorn starts serving just after the announcement
+            try:
+                page = urllib.request.urlopen(url, timeout=5).read().decode()
+                break
+            except OSError:
+                time.sleep(0.1)
+        assert "hoseline studio" in page
+    finally:
+        server.send_signal(signal.SIGINT)
+        assert server.wait(timeout=20) == 0
+
+
+def test_a_failure_inside_a_step_is_told_and_the_loop_goes_on(client, monkeypatch):
+    session = client.app.state.studio.session
+
+    def broken(target):
+        raise ZeroDivisionError("a bug")
+
+    with client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        with monkeypatch.context() as patch:
+            patch.setattr(session, "apply", broken)
+            ws.send_json({"type": "set", "seq": 1, "twist": 10.0})
+            kept, others = next_state(ws)
+        assert "internal error" in others[0]["message"] and kept["centerline"] == state["centerline"]
+        ws.send_json({"type": "set", "seq": 2, "twist": 10.0})
+        assert next_state(ws)[0]["twist"] == 10.0
+
+
+def test_a_sweep_file_dropped_with_its_pose_table_opens_with_its_motion(client, problem, tmp_path):
+    from hoseline.io.pose_table import pose_table_text
+
+    motion = demo_sweep(steps_per_degree=0.1, segments=SEGMENTS).motions[0]
+    table = pose_table_text("steer [deg]", motion.travel, motion.poses)
+    sweep_text = problem_to_toml(replace(problem, name="dropped sweep")).replace(
+        "[end]\n", '[end]\nbody = "knuckle"\n', 1) + '\n[[bodies]]\nname = "knuckle"\nposes = "knuckle.csv"\n'
+    alone = client.post("/upload/alone.toml", content=sweep_text.replace("knuckle.csv", "missing.csv").encode())
+    assert alone.status_code == 400 and "missing.csv" in alone.json()["error"]
+    assert str(tmp_path) not in alone.json()["error"]  # the server's folders are not told to the page
+    assert client.post("/upload/knuckle.csv?store=1", content=table.encode()).status_code == 200
+    assert client.post("/upload/sweep.toml", content=sweep_text.encode()).status_code == 200
+    with client.websocket_connect("/ws") as ws:
+        session, _ = opened(ws)
+        assert session["name"] == "dropped sweep" and session["sweep"]["poses"] == len(motion.poses)

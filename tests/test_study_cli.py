@@ -1,0 +1,221 @@
+"""`hoseline study`: the files it writes, the worst samples they reproduce, sweeps as the base, bad input."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from typer.testing import CliRunner
+
+from hoseline.cli import app
+from hoseline.demos.thesis_hose import demo_problem
+from hoseline.io.problem_file import load_problem, problem_to_toml
+from hoseline.io.sweep_file import load_sweep
+from hoseline.procedures.placement.sequence import solve
+from hoseline.procedures.sweep.quasi_static import run_sweep
+
+PLACEMENT_STUDY = """
+name = "thesis hose as built"
+base = "problem.toml"
+[sampling]
+method = "sobol"
+samples = 16
+seed = 3
+[[vary]]
+parameter = "end.point"
+distribution = "normal"
+sigma = [0.5, 0.5, 1.0]
+[[vary]]
+parameter = "hose.length"
+distribution = "uniform"
+range = [-4.0, 2.0]
+unit = "%"
+label = "length change under pressure"
+[[vary]]
+parameter = "hose.bending_stiffness"
+distribution = "loguniform"
+factor = 2.0
+[limits]
+bend_radius = 36.0
+end_torque = 2500.0
+"""
+
+SWEEP_FILE = """
+[hose]
+length = 330.6
+outer_diameter = 10.1
+bending_stiffness = 149563.0
+torsion_factor = 25.0
+min_bend_radius = 30.0
+segments = 30
+[start]
+point = [-13.0, 0.0, -11.25]
+direction = [0.0, 1.0, 0.0]
+[end]
+point = [-173.064, -7.0, -11.25]
+direction = [1.0, 0.0, 0.0]
+body = "knuckle"
+[[bodies]]
+name = "knuckle"
+stages = [{ name = "jounce", translate = [0.0, 20.0], axis = [0.0, 0.0, 1.0], steps = 4 }]
+[[obstacles]]
+name = "post"
+file = "post.stl"
+clearance = 10.0
+[sweep]
+compare_free_roll = false
+"""
+
+SWEEP_STUDY = """
+base = "sweep.toml"
+[sampling]
+method = "latin-hypercube"
+samples = 6
+seed = 1
+[[vary]]
+parameter = "end.point"
+distribution = "sphere"
+radius = 2.0
+[[vary]]
+parameter = "end.twist"
+distribution = "uniform"
+range = [-10.0, 10.0]
+"""
+
+
+def _run(*args: str):
+    return CliRunner().invoke(app, ["study", *args])
+
+
+@pytest.fixture(scope="module")
+def placement_study(tmp_path_factory):
+    """The placement study run once (in process): its folder and output."""
+    folder = tmp_path_factory.mktemp("placement")
+    (folder / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
+    (folder / "study.toml").write_text(PLACEMENT_STUDY, encoding="utf-8")
+    result = _run(str(folder / "study.toml"), "-o", str(folder / "out"), "--workers", "0")
+    assert result.exit_code == 0, result.output
+    return folder, result.output
+
+
+def test_a_placement_study_writes_its_files(placement_study):
+    folder, output = placement_study
+    out = folder / "out"
+    for name in ("report.html", "envelope.stl", "summary.json", "samples.csv", "samples.npz", "envelope.csv",
+                 "sensitivities.csv"):
+        assert (out / name).is_file(), name
+    assert not (out / ".partial").exists()
+    assert "16 samples" in output
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    rows = list(csv.DictReader((out / "samples.csv").open(encoding="utf-8")))
+    assert len(rows) == 16 and all(row["status"] == "solved" for row in rows)
+    # the probability is the fraction of samples beyond the limit, with an interval around it
+    radii = np.array([float(row["bend_radius [mm]"]) for row in rows])
+    bend = next(p for p in summary["probabilities"] if p["quantity"] == "bend_radius")
+    assert bend["broken"] == int(np.sum(radii < 36.0))
+    assert bend["ci95"][0] <= bend["probability"] <= bend["ci95"][1]
+    # the envelope mesh is closed and wraps every sampled station at about the outer radius (5.05 mm)
+    mesh = trimesh.load(out / "envelope.stl")
+    assert mesh.is_watertight
+    with np.load(out / "samples.npz") as data:
+        stations = data["shapes"][:, 0].reshape(-1, 3)
+    low, high = stations.min(axis=0), stations.max(axis=0)
+    assert np.all(np.abs(mesh.bounds[0] - (low - 5.05)) < 2.6) and np.all(np.abs(mesh.bounds[1] - (high + 5.05)) < 2.6)
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert "First order beside Monte Carlo" in html and "Which tolerance matters most" in html
+
+
+def test_the_worst_samples_are_problem_files_that_reproduce_them(placement_study):
+    """worst/QUANTITY/problem.toml placed with `hoseline solve`'s solver gives the sample's value again."""
+    folder, _ = placement_study
+    out = folder / "out"
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    rows = list(csv.DictReader((out / "samples.csv").open(encoding="utf-8")))
+    for entry in summary["probabilities"]:
+        quantity, index = entry["quantity"], entry["worst_sample"]
+        values = [float(row[[key for key in row if key.startswith(quantity + " [")][0]]) for row in rows]
+        assert index == (int(np.argmin(values)) if quantity == "bend_radius" else int(np.argmax(values)))
+        result = solve(load_problem(out / "worst" / quantity / "problem.toml"), estimate_error=False)
+        reproduced = result.min_bend_radius if quantity == "bend_radius" else abs(
+            float(result.end_moment @ result.problem.end.direction))
+        assert reproduced == pytest.approx(values[index], rel=1e-6)
+
+
+def test_sensitivity_table_lists_the_varied_coordinates(placement_study):
+    folder, _ = placement_study
+    rows = list(csv.DictReader((folder / "out" / "sensitivities.csv").open(encoding="utf-8")))
+    assert [row["coordinate"] for row in rows] == ["end.x", "end.y", "end.z", "hose.length", "hose.bending"]
+
+
+@pytest.fixture(scope="module")
+def sweep_study(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("sweep")
+    post = trimesh.creation.cylinder(radius=10.0, height=200.0, sections=24)
+    post.apply_translation((-90.0, 120.0, 0.0))
+    post.export(folder / "post.stl")
+    (folder / "sweep.toml").write_text(SWEEP_FILE, encoding="utf-8")
+    (folder / "study.toml").write_text(SWEEP_STUDY, encoding="utf-8")
+    result = _run(str(folder / "study.toml"), "-o", str(folder / "out"), "--workers", "0", "-q")
+    assert result.exit_code == 0, result.output
+    return folder
+
+
+def test_a_sweep_study_judges_every_pose(sweep_study):
+    """Per pose the clearance distribution; the limits from the sweep file (the post's clearance, the hose's
+    bend radius); the worst sample as a sweep file that `hoseline sweep` reads and that reproduces it."""
+    out = sweep_study / "out"
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert [p["limit"] for p in summary["probabilities"]] == ["clearance:post at least 10 mm", "bend_radius at least 30 mm"]
+    rows = list(csv.DictReader((out / "clearance_by_pose.csv").open(encoding="utf-8")))
+    assert len(rows) == 5
+    with np.load(out / "samples.npz") as data:
+        per_pose = data["clearance"][:, 0, :]
+        values = data["values"]
+    assert np.allclose([float(row["post min [mm]"]) for row in rows], per_pose.min(axis=0))
+    assert np.allclose(values[:, 0], per_pose.min(axis=1))  # the quantity is the worst pose
+    worst = summary["probabilities"][0]["worst_sample"]
+    sweep = load_sweep(out / "worst" / "clearance_post" / "sweep.toml")
+    again = run_sweep(sweep)
+    assert again.clearances[0].distance.min() == pytest.approx(values[worst, 0], rel=1e-6)
+    assert "placements only" in " ".join(summary["notes"])
+
+
+@pytest.mark.parametrize("change, message", [
+    ('parameter = "hose.bending_stiffness"', 'vary[2].parameter'),
+    ('distribution = "sphere"\nradius = 1.0\n', "does not apply"),
+    ('sigma = [0.5, 0.5, 1.0]\nradius = 2.0', "takes sigma only: remove radius"),
+    ('[limits]\nbend_radius = 36.0', "limits.bendradius: unknown quantity"),
+])
+def test_bad_study_files_are_refused_naming_the_field(tmp_path, change, message):
+    """Exit code 2, one line naming the field and the fix, nothing written."""
+    text = PLACEMENT_STUDY
+    if change.startswith("parameter"):
+        text = text.replace('parameter = "hose.bending_stiffness"', 'parameter = "hose.bending_stiff"')
+    elif change.startswith("distribution"):
+        text = text.replace('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "sphere"\nradius = 1.0')
+    elif change.startswith("sigma"):
+        text = text.replace("sigma = [0.5, 0.5, 1.0]", "sigma = [0.5, 0.5, 1.0]\nradius = 2.0")
+    else:
+        text = text.replace("bend_radius = 36.0", "bendradius = 36.0")
+    (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
+    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"), "--workers", "0")
+    assert result.exit_code == 2
+    assert message in result.output.replace("\n", " ")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_missing_base_file_is_named(tmp_path):
+    (tmp_path / "study.toml").write_text(PLACEMENT_STUDY.replace("problem.toml", "nowhere.toml"), encoding="utf-8")
+    result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"))
+    assert result.exit_code == 2 and 'base = "nowhere.toml": cannot read' in result.output.replace("\n", " ")
+
+
+def test_help_lists_the_study_command():
+    result = CliRunner().invoke(app, ["--help"])
+    assert "study" in result.output
+    assert Path(__file__).name  # keep pytest from treating this module as empty when filtered

@@ -1,0 +1,97 @@
+"""Design search on a case built so that the answer is known.
+
+A heavy hose hangs between two coaxial mounts 200 mm apart, under a plate (above its middle) and
+between two side walls.  The longer the hose, the deeper it sags: the clearance to the plate grows
+with the length, and the bend at the mounts tightens.  Clocking the end fitting either way turns the
+sag out of its vertical plane, towards a wall and up: the clearance to the plate is largest
+unclocked (the mounts' mirror symmetry makes it even in the clocking).  So the best candidate is the
+longest catalogue length whose bend radius still meets the limit, unclocked; the limit is put halfway
+between the bend radii of two neighbouring lengths (by the plain placement, not the search).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import trimesh
+
+from hoseline.model import Hose, Mount, Problem
+from hoseline.model.motion import Translation, generated_motion
+from hoseline.model.sweep import Obstacle, SweepProblem
+from hoseline.procedures.placement.sequence import solve
+from hoseline.procedures.variation.design_search import DesignGrid
+from hoseline.procedures.variation.engine import Where
+from hoseline.procedures.variation.quantities import Limit, quantities
+from hoseline.procedures.variation.run import run_study
+from hoseline.procedures.variation.samples import StudyBase
+from hoseline.procedures.variation.study import Sampling, Study
+from hoseline.procedures.variation.tolerances import Variation
+
+LENGTHS = (205.0, 210.0, 215.0, 220.0, 225.0, 230.0, 235.0, 240.0)
+CLOCKINGS = (-60.0, -30.0, 0.0, 30.0, 60.0)
+EXPECTED_LENGTH = 225.0
+
+
+def _box(name: str, low, high, clearance: float) -> Obstacle:
+    mesh = trimesh.creation.box(bounds=[low, high])
+    return Obstacle(name, np.asarray(mesh.vertices), np.asarray(mesh.faces), clearance)
+
+
+def _case() -> tuple[Problem, SweepProblem]:
+    hose = Hose(length=220.0, outer_diameter=6.0, bending_stiffness=2e4, torsional_stiffness=2e4 / 1.5,
+                mass_per_length=0.5, segments=30)
+    problem = Problem(hose, Mount([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]), Mount([200.0, 0.0, 0.0], [-1.0, 0.0, 0.0]), 0.0,
+                      gravity=np.array([0.0, 0.0, -9.81]))
+    still = generated_motion("frame", [Translation(np.array([0.0, 0.0, 1.0]), (0.0, 0.0), 1)])  # the assembly pose
+    obstacles = (_box("plate", [50, -60, 30], [150, 60, 40], 5.0), _box("wall_left", [-20, 40, -100], [220, 50, 50], 5.0),
+                 _box("wall_right", [-20, -50, -100], [220, -40, 50], 5.0))
+    return problem, SweepProblem(problem, None, None, (still,), obstacles, compare_free_roll=False)
+
+
+def _bend_radius(problem: Problem, length: float) -> float:
+    return solve(replace(problem, hose=replace(problem.hose, length=length)), estimate_error=False).min_bend_radius
+
+
+def test_the_search_finds_the_longest_length_within_the_bend_limit_unclocked():
+    problem, sweep = _case()
+    limit_value = 0.5 * (_bend_radius(problem, EXPECTED_LENGTH) + _bend_radius(problem, EXPECTED_LENGTH + 5.0))
+    names = quantities(("plate", "wall_left", "wall_right"))
+    limits = (Limit(names[0], 5.0), Limit(names[1], 5.0), Limit(names[2], 5.0), Limit(names[3], limit_value))
+    study = Study("design", StudyBase(problem, sweep), Variation(()), Sampling(count=0), limits,
+                  design=DesignGrid(LENGTHS, CLOCKINGS, "clearance:plate"))
+    outcome = run_study(study, where=Where(workers=0))
+    design = outcome.design
+    plate, bend = design.margins[:, :, 0], design.margins[:, :, 3]
+    # the construction holds: plate clearance grows with length, bend margin shrinks, both even in the clocking
+    assert np.all(np.diff(plate, axis=0) > 0.0) and np.all(np.diff(bend[:, 2]) < 0.0)
+    assert np.allclose(plate, plate[:, ::-1], atol=1e-6) and np.all(np.argmax(plate, axis=1) == 2)
+    best = design.table()[0]
+    assert (best["length_mm"], best["clocking_deg"]) == (EXPECTED_LENGTH, 0.0)
+    # every candidate ranked meets every limit, and the longer lengths are out on the bend radius
+    assert all(np.all(design.margins[i, j] >= 0.0) for i, j in design.ranking)
+    assert all(LENGTHS[i] <= EXPECTED_LENGTH for i, _ in design.ranking)
+
+
+def test_with_tolerances_a_candidate_is_judged_on_the_margin_95_percent_keep():
+    """Judging over tolerance samples: the margin is the 5th percentile over a candidate's samples, and a
+    candidate with a failed sample meets no limit (synthetic values: the ranking logic alone)."""
+    from hoseline.procedures.variation.design_search import judge
+
+    names = quantities(())
+    limit = Limit(names[0], 10.0)  # bend radius at least 10 mm
+    grid = DesignGrid((300.0, 310.0), (0.0,), "bend_radius", samples=20)
+    values = np.full((40, len(names)), np.nan)
+    values[:20, 0] = np.linspace(9.0, 19.0, 20)  # 300 mm: 5th percentile 9.5 -> not met
+    values[20:, 0] = np.linspace(11.0, 21.0, 20)  # 310 mm: 5th percentile 11.5 -> met
+    failed = np.zeros(40, dtype=bool)
+    outcome = judge(grid, (limit,), [q.name for q in names],
+                    {"values": values, "failed": failed, "reason": np.full(40, "")})
+    assert np.allclose(outcome.margins[:, 0, 0], [np.percentile(values[:20, 0], 5) - 10.0,
+                                                  np.percentile(values[20:, 0], 5) - 10.0])
+    assert outcome.ranking == [(1, 0)]
+    failed[25] = True
+    values[25] = np.nan
+    reasons = np.where(failed, "PlacementError: no path", "")
+    outcome = judge(grid, (limit,), [q.name for q in names], {"values": values, "failed": failed, "reason": reasons})
+    assert outcome.ranking == [] and outcome.failed[1, 0] == 1 and outcome.reasons == ["PlacementError: no path"]
