@@ -96,13 +96,14 @@ def main() -> None:
             batches, total, cpu, failed = timed(placement, options.placements, 2, warm)
             print(f"placements, start {start}: {options.placements} samples on 2 workers in {batches:.1f} s ({total:.1f} s "
                   f"with the cluster's start), {options.placements / batches:.0f} samples/s, {failed} failed, worker CPU "
-                  f"{1e3 * cpu:.2f} ms per sample (idle 2 cores: {options.placements * cpu / 2:.1f} s); target 60 s: "
-                  f"ratio {batches / 60.0:.2f}   ({load()})")
+                  f"{1e3 * cpu:.2f} ms per sample (idle 2 cores: {options.placements * cpu / 2:.1f} s); target 60 s for "
+                  f"10 000: ratio {batches / (60.0 * options.placements / 10_000):.2f}   ({load()})")
     if options.sweeps:
         batches, total, cpu, failed = timed(sweep_base, options.sweeps, 2)
         print(f"sweeps: {options.sweeps} samples of {sweep.pose_count} poses on 2 workers in {batches:.1f} s ({total:.1f} s "
               f"with the cluster's start), {failed} failed, worker CPU {1e3 * cpu:.0f} ms per sample (idle 2 cores: "
-              f"{options.sweeps * cpu / 2:.0f} s); target 300 s: ratio {batches / 300.0:.2f}   ({load()})")
+              f"{options.sweeps * cpu / 2:.0f} s); target 300 s for 1000: ratio "
+              f"{batches / (300.0 * options.sweeps / 1000):.2f}   ({load()})")
 
 if __name__ == "__main__":
     main()

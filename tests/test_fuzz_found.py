@@ -94,3 +94,39 @@ def test_iges_points_out_of_range_are_named_by_label(tmp_path, no_solving):
     code, output = run("solve", write(tmp_path / "problem.toml", IGES_PROBLEM.decode()), "-o", tmp_path / "out", "-q")
     assert code == common.BAD_INPUT, output
     assert "mounts.iges" in output and "point D at (-1.73e+15, -7, -11.25) mm lies outside +-100000 mm" in output
+
+
+def test_a_mesh_whose_text_is_not_utf8_is_refused_as_such(tmp_path, no_solving):
+    """A damaged ASCII STL made trimesh reach for an optional module; the message said only that it was missing."""
+    from fuzz_cases import SWEEP_TOML as WITH_MESH
+    from fuzz_cases import strut_mesh
+
+    stl = strut_mesh("stl")
+    write(tmp_path / "knuckle.csv", HEADER + "0, 0, 0, 0, 1, 0, 0, 0\n")
+    (tmp_path / "strut.stl").write_bytes(stl[:30] + b"\xff\xfe" + stl[30:])
+    code, output = run("sweep", write(tmp_path / "sweep.toml", WITH_MESH.replace("{ext}", "stl")), "-o", tmp_path / "out")
+    assert code == common.BAD_INPUT
+    assert "strut.stl: cannot be read as a mesh: its text is neither ASCII nor UTF-8" in output
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_division_by_zero_in_the_compiled_newton_is_a_failed_solve_not_a_traceback(monkeypatch):
+    """The long fuzz run met a nearly weightless-stiff, heavy 11.8 m hose whose Newton kernel divided
+    by zero; the solve must report non-convergence so that the placement fails with where and why."""
+    import numpy as np
+
+    from hoseline.demos.thesis_hose import demo_problem
+    from hoseline.mechanics import newton
+    from hoseline.mechanics.rod import RodState
+    from hoseline.procedures.placement.sequence import PlacementPath, rod_properties
+
+    def divides_by_zero(*args):
+        raise ZeroDivisionError("division by zero")
+
+    problem = demo_problem(0.0)
+    props = rod_properties(problem)
+    clamps = PlacementPath(problem).place(0.5)
+    state = RodState(np.repeat(clamps.start_frame[None], props.segments, axis=0), np.zeros(3))
+    monkeypatch.setattr(newton, "_track_kernel", divides_by_zero)
+    same, report = newton.solve_equilibrium(props, clamps, state)
+    assert not report.converged and "division by zero" in report.message and same is state

@@ -1,4 +1,4 @@
-"""What every command shares: exit codes, option help, one-line errors, the progress bar.
+"""What every command shares: exit codes, option help, one-line errors, the first-run compile notice, the progress bar.
 
 Exit codes: 0 success, 2 bad input (files, paths, options), 3 the solver failed, 4 an export
 could not be made, 5 a check failed (compare --check).  Heavy modules (the solver, exports)
@@ -8,8 +8,9 @@ are imported inside the functions that need them, so that `hoseline --help` star
 from __future__ import annotations
 
 import errno
+import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import typer
@@ -48,22 +49,26 @@ NO_CACHE = "compiling the solver (no writable cache folder: every run compiles; 
 
 def compile_solver(quiet: bool, clearance: bool = False, stiffeners: bool = False) -> None:
     """Compile the solver's kernels (with `clearance` those of clearance queries, with `stiffeners`
-    those of stiffener springs) if this installation has not yet, saying so meanwhile: a spinner
-    on a terminal, a line in a log, nothing when quiet.  See hoseline/procedures/compile_kernels.py."""
-    from hoseline.compilation import persistent
+    those of stiffener springs) if this installation has not yet, saying so meanwhile (a spinner
+    on a terminal, a line in a log) and then how long it took; nothing is said when quiet.
+    See hoseline/procedures/compile_kernels.py."""
+    from hoseline.compilation import persistent, version_folder
     from hoseline.procedures.compile_kernels import compile_kernels, kernels_compiled
 
     if kernels_compiled(clearance, stiffeners):
         return
-    console = Console(stderr=True)
-    message = FIRST_RUN if persistent() else NO_CACHE
-    if quiet or not console.is_terminal:
-        if not quiet:
-            console.print(message)
+    if quiet:
         compile_kernels(clearance, stiffeners)
         return
-    with console.status(message):
+    console = Console(stderr=True)
+    message = FIRST_RUN if persistent() else NO_CACHE
+    if not console.is_terminal:
+        console.print(message)
+    started = time.perf_counter()
+    with console.status(message) if console.is_terminal else nullcontext():
         compile_kernels(clearance, stiffeners)
+    kept = f"kept in {version_folder()}" if persistent() else "not kept"
+    console.print(f"compiled the solver in {time.perf_counter() - started:.0f} s ({kept})", soft_wrap=True)
 
 
 @contextmanager

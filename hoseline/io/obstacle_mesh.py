@@ -36,6 +36,11 @@ def read_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         return _read_step(path)
     try:
         mesh = trimesh.load(path, force="mesh")
+    except ModuleNotFoundError as exc:  # trimesh guesses the encoding of text that is not UTF-8 with an optional module
+        raise ObstacleFileError(
+            f"{path}: cannot be read as a mesh: its text is neither ASCII nor UTF-8 (damaged, or another encoding; "
+            f"reading it would need the module {exc.name}); export the part again as binary STL, OBJ or PLY"
+        ) from None
     except Exception as exc:  # trimesh raises many kinds for a foreign or broken file
         raise ObstacleFileError(
             f"{path}: cannot be read as a mesh ({type(exc).__name__}: {exc}); use STL, OBJ, PLY or STEP"

@@ -46,9 +46,14 @@ BANDWIDTH = 5  # half bandwidth of the Hessian: 3x3 blocks, neighbours only
 
 
 @njit(cache=True)
-def _row(frame, k):
-    # director k of a frame as a 3-tuple (tuples stay in registers, small arrays do not)
-    return frame[k, 0], frame[k, 1], frame[k, 2]
+def _rows(frame):
+    # the three directors of a frame as 3-tuples (tuples stay in registers, small arrays do not;
+    # one function for all three: a constant index argument would compile one specialisation each)
+    return (
+        (frame[0, 0], frame[0, 1], frame[0, 2]),
+        (frame[1, 0], frame[1, 1], frame[1, 2]),
+        (frame[2, 0], frame[2, 1], frame[2, 2]),
+    )
 
 
 @njit(cache=True)
@@ -77,8 +82,8 @@ def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa,
     Written with scalars and 3-tuples: 3x3 products through BLAS and small temporary arrays
     cost more than the arithmetic (this runs N+1 times per Newton iteration).
     """
-    a_0, a_1, a_2 = _row(frame_a, 0), _row(frame_a, 1), _row(frame_a, 2)
-    b_0, b_1, b_2 = _row(frame_b, 0), _row(frame_b, 1), _row(frame_b, 2)
+    a_0, a_1, a_2 = _rows(frame_a)
+    b_0, b_1, b_2 = _rows(frame_b)
     # Q = A B^T, Q_kl = d_k^A . d_l^B
     q00, q01, q02 = _dot(a_0, b_0), _dot(a_0, b_1), _dot(a_0, b_2)
     q10, q11, q12 = _dot(a_1, b_0), _dot(a_1, b_1), _dot(a_1, b_2)
@@ -141,8 +146,8 @@ def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa,
 @njit(cache=True)
 def _axial_and_c(frame_a, frame_b):
     # a = axial(Q - Q^T) and c = 1 + tr Q of Q = A B^T (see the module doc), without forming Q
-    a_0, a_1, a_2 = _row(frame_a, 0), _row(frame_a, 1), _row(frame_a, 2)
-    b_0, b_1, b_2 = _row(frame_b, 0), _row(frame_b, 1), _row(frame_b, 2)
+    a_0, a_1, a_2 = _rows(frame_a)
+    b_0, b_1, b_2 = _rows(frame_b)
     a0 = _dot(a_2, b_1) - _dot(a_1, b_2)
     a1 = _dot(a_0, b_2) - _dot(a_2, b_0)
     a2 = _dot(a_1, b_0) - _dot(a_0, b_1)

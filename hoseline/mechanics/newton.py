@@ -190,6 +190,14 @@ def solve_equilibrium(
     tolerance: relative residual of force and moment balance.  minimise: see module doc.
     With clips (clamps.clips) the iteration is that of mechanics/clipped_newton.py.
     """
+    try:
+        return _solve_equilibrium(props, clamps, state, tolerance, max_iterations, minimise)
+    except ZeroDivisionError:  # compiled code raises it where a joint or the system is exactly singular
+        return state, NewtonReport(False, 0, math.inf, -1, "division by zero (an exactly singular joint or system)")
+
+
+def _solve_equilibrium(props, clamps, state, tolerance, max_iterations, minimise):
+    """solve_equilibrium without the guard."""
     if clamps.clips:
         from hoseline.mechanics import clipped_newton
 

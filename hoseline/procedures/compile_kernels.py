@@ -7,18 +7,35 @@ placement uses; with clearance=True it also asks a clearance query (sweeps), wit
 stiffeners=True it places the hose with the thesis' stiffener springs (their kernels take other
 argument types).  Kernels no part asked for compile when first used (clips, for one).
 
-A worker of a cluster calls it once when it starts (for Dask: in a WorkerPlugin's setup).
-Workers on one machine share the cache folder: the first compiles while the others wait for
-it, then load.  Loading every kernel of a placement from the cache takes about 0.4 s of CPU.
+On a machine with two cores or more, a first run compiles in two processes: this one compiles
+the Newton iteration (newton_kernels, about half of the work and the longest single piece),
+while a second compiles what a placement calls after it (late_kernels: stability, moments,
+energy, the predictor) into the shared cache; then the small placement loads those.  Both
+work on small made-up arrays of the types a placement passes (tests/test_compiled_cache.py
+checks that a placement then adds no signature to them); a mismatch costs only time.
+
+A worker of a cluster calls compile_kernels() once when it starts (for Dask: in a
+WorkerPlugin's setup).  Workers on one machine share the cache folder: the first compiles
+while the others wait for it, then load.  Loading every kernel of a placement from the cache
+takes about 0.4 s of CPU.
 """
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
 
-from hoseline.compilation import compiling, is_compiled
+from hoseline.compilation import PACKAGE, compiling, is_compiled, persistent, version_folder
+from hoseline.mechanics.energy import BANDWIDTH, elastic_energy, joint_moments
+from hoseline.mechanics.newton import RodProperties, solve_equilibrium
+from hoseline.mechanics.rod import Clamps, RodState, centerline
+from hoseline.mechanics.rotations import extrapolate_frames, rotate_frames
+from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model import Hose, Mount, Problem
 from hoseline.model.stiffeners import thesis_preset
 from hoseline.procedures.geometry.clearance import TriangleIndex
@@ -38,6 +55,9 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False) -> None:
     """Compile, or load from the cache, every kernel of a placement; with `clearance` those of a
     clearance query, with `stiffeners` those of a placement with stiffener springs."""
     with compiling("placement"):
+        if not is_compiled("placement"):
+            with _second_process("late_kernels"):
+                newton_kernels()
         solve(SMALL_PLACEMENT)
     if clearance:
         with compiling("clearance"):
@@ -54,3 +74,50 @@ def kernels_compiled(clearance: bool = False, stiffeners: bool = False) -> bool:
     """Whether compile_kernels(clearance, stiffeners) has already filled the cache for this version and CPU."""
     wanted = ("placement", "clearance" if clearance else None, "stiffeners" if stiffeners else None)
     return all(is_compiled(part) for part in wanted if part)
+
+
+def newton_kernels() -> None:
+    """Compile the Newton iteration, both kinds (solve_equilibrium), on a small bent hose."""
+    segments = 16
+    bend = np.outer(np.linspace(0.0, 1.0, segments), [0.2, 0.0, 0.0])  # rad about x, growing along the hose
+    frames = rotate_frames(np.tile(np.eye(3), (segments, 1, 1)), bend)
+    nodes = centerline(frames, np.zeros(3), 1.0)
+    props = RodProperties(np.full(3, 1e4), 1.0, segments)
+    clamps = Clamps(np.zeros(3), np.eye(3), nodes[-1], frames[-1].copy(), True, np.zeros(3))
+    for minimise in (False, True):
+        solve_equilibrium(props, clamps, RodState(frames, np.zeros(3)), max_iterations=1, minimise=minimise)
+
+
+def late_kernels() -> None:
+    """Compile what a placement calls after its Newton iterations, on small made-up arrays of the
+    same types: the stability check (48 unknowns: its compiled iteration), moments, elastic
+    energy, the predictor between steps."""
+    unknowns = 48
+    band = np.zeros((unknowns, BANDWIDTH + 1))
+    band[:, 0] = np.arange(1.0, unknowns + 1.0)
+    jac_t = np.zeros((unknowns, 3))
+    jac_t[:3] = np.eye(3)
+    smallest_eigenpairs(band, jac_t, count=1)
+    frames = np.tile(np.eye(3), (16, 1, 1))
+    joint_moments(frames, np.eye(3), np.eye(3), np.ones(3), 1.0, True, None)
+    elastic_energy(frames, np.eye(3), np.eye(3), np.ones(3), 1.0, True, None)
+    extrapolate_frames(frames, frames, 1.0)
+
+
+@contextmanager
+def _second_process(name: str):
+    # run `name`() of this module in another process during the body, into the same cache
+    # folder, when there is a second core and a cache that outlives the process; wait for it after
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    if cores < 2 or not persistent():
+        yield
+        return
+    environment = {**os.environ, "NUMBA_CACHE_DIR": str(version_folder().parent),
+                   "PYTHONPATH": os.pathsep.join([str(PACKAGE.parent), os.environ.get("PYTHONPATH", "")])}
+    code = f"from {__name__} import {name}; {name}()"
+    helper = subprocess.Popen([sys.executable, "-c", code], env=environment,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        yield
+    finally:
+        helper.wait()  # a failed helper only costs time: the placement compiles what it lacks
