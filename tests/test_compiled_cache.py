@@ -129,26 +129,51 @@ def test_the_kernels_live_in_the_version_folder():
     assert compilation.persistent()
 
 
+SIGNATURES = textwrap.dedent("""
+    import sys
+    from numba.core.registry import CPUDispatcher
+
+    def signatures():
+        # (kernel, argument types) of every compiled or loaded kernel of hoseline in this process
+        return {(f"{kernel.py_func.__module__}.{kernel.py_func.__qualname__}", str(signature))
+                for name, module in list(sys.modules.items()) if name.startswith("hoseline")
+                for kernel in vars(module).values() if isinstance(kernel, CPUDispatcher)
+                for signature in kernel.overloads}
+""")
+
+
+def test_the_made_up_arrays_of_the_parallel_compile_have_a_placements_types():
+    """newton_kernels() and stability_kernels() (run side by side on a first run) compile the kernels
+    a placement uses with the argument types it uses: the placement then adds no signature to them."""
+    code = SIGNATURES + textwrap.dedent("""
+        from hoseline.procedures import compile_kernels
+
+        compile_kernels.newton_kernels()
+        compile_kernels.stability_kernels()
+        covered = signatures()
+        kernels = {kernel for kernel, _ in covered}
+        compile_kernels.solve(compile_kernels.SMALL_PLACEMENT)
+        print(sorted((kernel, types) for kernel, types in signatures() - covered if kernel in kernels))
+        print(sorted(kernel.rsplit(".", 1)[1] for kernel in kernels if kernel.rsplit(".", 1)[1] in
+                     ("_track_kernel", "_minimise_kernel", "_subspace_iteration")))
+    """)
+    cache = numba.config.CACHE_DIR or compilation.version_folder().parent
+    assert run_python(code, compilation.PACKAGE.parent, cache).splitlines() == [
+        "[]", "['_minimise_kernel', '_subspace_iteration', '_track_kernel']"]
+
+
 def test_placements_after_compile_kernels_need_no_other_kernel(tmp_path):
     """compile_kernels() compiles or loads every kernel, with every argument type, that a full-size
     placement uses: the demo hose at 100 segments then adds no signature to any kernel, nor does
     the hose with stiffener springs twisted by 45 degrees after compile_kernels(stiffeners=True).
     (Counting signatures, not compilations: a kernel loaded from the cache would have compiled on
     a fresh installation.)"""
-    code = textwrap.dedent("""
-        import sys
+    code = SIGNATURES + textwrap.dedent("""
         from dataclasses import replace
-        from numba.core.registry import CPUDispatcher
         from hoseline.procedures.compile_kernels import compile_kernels, kernels_compiled
         from hoseline.demos.thesis_hose import demo_problem
         from hoseline.model.stiffeners import thesis_preset
         from hoseline.procedures.placement.sequence import solve
-
-        def signatures():
-            return {(f"{kernel.py_func.__module__}.{kernel.py_func.__qualname__}", str(signature))
-                    for name, module in list(sys.modules.items()) if name.startswith("hoseline")
-                    for kernel in vars(module).values() if isinstance(kernel, CPUDispatcher)
-                    for signature in kernel.overloads}
 
         compile_kernels()
         before = signatures()
