@@ -35,7 +35,8 @@ print(scaled(1.5), sum(scaled.stats.cache_hits.values()))
 def run_python(code: str, source: Path, cache: Path) -> str:
     """Run `code` in a fresh interpreter that imports hoseline from `source`, with NUMBA_CACHE_DIR=cache."""
     env = {**os.environ, "PYTHONPATH": str(source), "NUMBA_CACHE_DIR": str(cache)}
-    done = subprocess.run([sys.executable, "-c", code], env=env, cwd=source, capture_output=True, text=True, timeout=900)
+    done = subprocess.run([sys.executable, "-c", code], env=env, cwd=source, capture_output=True, text=True,
+                          timeout=900)
     assert done.returncode == 0, done.stderr
     return done.stdout
 
@@ -113,7 +114,8 @@ def test_every_kernel_module_is_below_a_package_that_installs_the_cache():
     """A module that defines kernels must be imported after compilation.install(): its package,
     or one above it (not hoseline/ itself, which the command line imports for --help), calls it."""
     package = compilation.PACKAGE
-    kernel_modules = [p for p in compilation.kernel_sources() if "numba" in p.read_text() and p != Path(compilation.__file__)]
+    kernel_modules = [path for path in compilation.kernel_sources()
+                      if compilation._USES_NUMBA.search(path.read_text()) and path != Path(compilation.__file__)]
     assert kernel_modules
     for module in kernel_modules:
         inits = [folder / "__init__.py" for folder in module.relative_to(package).parents if folder != Path(".")]

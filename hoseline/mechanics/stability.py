@@ -15,7 +15,7 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-from hoseline.mechanics.banded import banded_matvec, kkt_solve, ldlt_banded, ldlt_solve, solve_3x3
+from hoseline.mechanics.banded import banded_matvec, kkt_solve, ldlt_banded, ldlt_solve
 from hoseline.mechanics.bordered import kkt_solve_bordered
 
 
@@ -51,7 +51,15 @@ def smallest_eigenpairs(band: np.ndarray, jac_t: np.ndarray, count: int = 1, tol
     if tiny or n < 40:
         return _dense_pairs(band, jac_t, count)
     block = max(count, negative) + 3
-    values, vectors = _subspace_iteration(band, jac_t, lower, diag, _start_block(n, block).copy(), count, tolerance)
+    # the m x m border matrices, inverted here once (NumPy): the compiled iteration needs no
+    # linear solver of its own (Numba's LAPACK glue would add 3 s to the first run's compiling)
+    h_inv_jt = ldlt_solve(lower, diag, jac_t)
+    schur_inverse = np.linalg.inv(jac_t.T @ h_inv_jt)
+    normal_inverse = np.linalg.inv(jac_t.T @ jac_t)
+    start = _start_block(n, block).copy()
+    values, vectors = _subspace_iteration(
+        band, jac_t, lower, diag, h_inv_jt, schur_inverse, normal_inverse, start, count, tolerance
+    )
     found_negative = int(np.sum(values < 0.0))
     if found_negative < negative:
         return _dense_pairs(band, jac_t, max(count, negative))
@@ -67,33 +75,23 @@ def _start_block(n: int, block: int) -> np.ndarray:
 
 
 @njit(cache=True)
-def _solve_small(matrix, rhs):
-    # matrix^-1 rhs for the m x m border matrices: closed form for the end alone (m = 3), LAPACK with clips
-    if matrix.shape[0] == 3:
-        return solve_3x3(matrix, rhs)
-    return np.ascontiguousarray(np.linalg.solve(matrix, rhs))
-
-
-@njit(cache=True)
-def _solve_projected(lower, diag, jac_t, h_inv_jt, schur, rhs):
+def _solve_projected(lower, diag, jac_t, h_inv_jt, schur_inverse, rhs):
     # [[H, J^T], [J, 0]] [w; y] = [rhs; 0]  ->  w = H^-1 (rhs - J^T y), J w = 0
     h_inv_rhs = ldlt_solve(lower, diag, rhs)
-    y = _solve_small(schur, jac_t.T @ h_inv_rhs)
+    y = schur_inverse @ (jac_t.T @ h_inv_rhs)
     return h_inv_rhs - h_inv_jt @ y
 
 
 @njit(cache=True)
-def _subspace_iteration(band, jac_t, lower, diag, start, count, tolerance):
+def _subspace_iteration(band, jac_t, lower, diag, h_inv_jt, schur_inverse, normal_inverse, start, count, tolerance):
     """Shift-invert subspace iteration around zero on the constraint tangent space, from the
     columns of `start`; returns the Ritz values and vectors of the last iteration (unsorted).
 
+    h_inv_jt = H^-1 J^T; schur_inverse = (J H^-1 J^T)^-1; normal_inverse = (J J^T)^-1.
     Compiled: a handful of iterations on (n, block) arrays, where Python's per-call cost of
     every small NumPy operation would dominate.
     """
-    h_inv_jt = ldlt_solve(lower, diag, jac_t)
-    schur = jac_t.T @ h_inv_jt
-    normal = jac_t.T @ jac_t
-    vectors = _solve_projected(lower, diag, jac_t, h_inv_jt, schur, start)
+    vectors = _solve_projected(lower, diag, jac_t, h_inv_jt, schur_inverse, start)
     values = np.full(start.shape[1], np.inf)
     band_scale = np.max(np.abs(band[:, 0]))
     for _ in range(200):
@@ -102,11 +100,11 @@ def _subspace_iteration(band, jac_t, lower, diag, start, count, tolerance):
         ritz_values, ritz_vectors = np.linalg.eigh(vectors.T @ hv)
         vectors = vectors @ ritz_vectors
         raw = hv @ ritz_vectors - vectors * ritz_values
-        raw -= jac_t @ _solve_small(normal, jac_t.T @ raw)  # only the part within the tangent space counts
+        raw -= jac_t @ (normal_inverse @ (jac_t.T @ raw))  # only the part within the tangent space counts
         residual = np.sqrt(np.sum(raw**2, axis=0))
         scale = max(abs(ritz_values[0]), 1e-30 * band_scale + 1e-300)
         values = ritz_values
         if np.all(residual[:count] <= tolerance * max(scale, np.max(np.abs(ritz_values[:count])))):
             break
-        vectors = _solve_projected(lower, diag, jac_t, h_inv_jt, schur, vectors)
+        vectors = _solve_projected(lower, diag, jac_t, h_inv_jt, schur_inverse, vectors)
     return values, vectors
