@@ -130,3 +130,21 @@ def test_a_division_by_zero_in_the_compiled_newton_is_a_failed_solve_not_a_trace
     monkeypatch.setattr(newton, "_track_kernel", divides_by_zero)
     same, report = newton.solve_equilibrium(props, clamps, state)
     assert not report.converged and "division by zero" in report.message and same is state
+
+
+def test_neutral_margin_is_relative_to_the_weight_of_a_heavy_soft_hose():
+    """A stability margin at rounding level must be judged against the terms it is made of: for a
+    heavy hose of tiny EI those are weight terms (|q| L), not EI/L^2, which would call rounding noise
+    of 1e-12 N 'unstable' (seen in the long fuzz run)."""
+    import numpy as np
+
+    from hoseline.mechanics.rod import Clamps, RodState
+    from hoseline.procedures.placement.stations import NEUTRAL_MARGIN, neutral_scale
+
+    class Props:
+        largest_stiffness, length = 0.17, 1000.0  # N*mm^2, mm
+
+    state = RodState(frames=np.zeros((4, 3, 3)), end_force=np.array([0.0, 0.0, -2.0]))
+    heavy = Clamps(np.zeros(3), np.eye(3), None, None, False, line_weight=np.array([0.0, 0.0, -0.05]))  # N/mm
+    assert neutral_scale(Props, heavy, state) == pytest.approx(0.05 * 1000.0)
+    assert NEUTRAL_MARGIN * neutral_scale(Props, heavy, state) > 3e-12 > NEUTRAL_MARGIN * 0.17 / 1000.0**2

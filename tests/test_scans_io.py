@@ -50,6 +50,7 @@ def test_stl_vertices_ascii_and_binary_are_merged(tmp_path):
     ("scan.xyz", "1 2 3\n" * 25 + "4 five 6\n", ["line 26", "not three numbers"]),
     ("scan.xyz", "1 2\n", ["line 1", "has 2 numbers"]),
     ("scan.txt", "1 2 3\n", ["only 1 points"]),
+    ("scan.xyz", "1 2 3\n" * 25 + "1e308 0 0\n", ["point 25", "beyond +-100000 mm", "in mm"]),
     ("scan.obj", "v 1 2 3\n", ["unknown scan format '.obj'", ".ply"]),
     ("scan.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float u\nend_header\n1\n", ["no x, y, z"]),
     ("scan.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 99\nproperty float x\nproperty float y\n"

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from hoseline.io.atomic import write_bytes
+from hoseline.model.limits import COORDINATE_MM
 
 FORMATS = {".ply": "PLY", ".xyz": "text", ".csv": "text", ".txt": "text", ".asc": "text", ".pts": "text", ".stl": "STL"}
 PLY_TYPES = {
@@ -39,7 +40,8 @@ def read_scan(path: str | Path, min_points: int = MIN_POINTS) -> np.ndarray:
     """Points (n, 3) in mm from a PLY, XYZ/CSV/TXT or STL file (format by the file's extension).
 
     min_points: fewer points are refused (1 for a file of reference points).
-    Non-finite points are refused; duplicate STL vertices are merged.
+    Non-finite points and coordinates beyond +-COORDINATE_MM (model/limits.py: a unit mistake or a
+    damaged file, not a hose) are refused; duplicate STL vertices are merged.
     Raises ScanFileError for content that is not a point cloud, OSError when unreadable.
     """
     path = Path(path)
@@ -55,6 +57,12 @@ def read_scan(path: str | Path, min_points: int = MIN_POINTS) -> np.ndarray:
     if not np.isfinite(points).all():
         bad = np.flatnonzero(~np.all(np.isfinite(points), axis=1))
         raise ScanFileError(f"{path}: point {bad[0]} is not finite ({points[bad[0]].tolist()}); remove it from the scan")
+    outside = np.flatnonzero(np.any(np.abs(points) > COORDINATE_MM, axis=1))
+    if outside.size:
+        raise ScanFileError(
+            f"{path}: point {outside[0]} ({points[outside[0]].tolist()}) lies beyond +-{COORDINATE_MM:g} mm "
+            f"({outside.size} such points): give the scan in mm, in the coordinate system of the mounts"
+        )
     return points
 
 

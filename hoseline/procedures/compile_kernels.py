@@ -8,7 +8,7 @@ stiffeners=True it places the hose with the thesis' stiffener springs (their ker
 argument types).  Kernels no part asked for compile when first used (clips, for one).
 
 On a machine with two cores or more, a first run compiles in two processes: this one compiles
-the Newton iteration (newton_kernels: 14 s of CPU of the 26 s), while a second compiles the
+the Newton iteration (newton_kernels: 15 s of CPU of the 25 s), while a second compiles the
 stability check (stability_kernels: 12 s, with the factorisation it shares) into the same
 cache folder; the small placement then loads the stability check and compiles the little
 left.  The wait drops from the sum to about the longer of the two, for about 4 s more CPU.

@@ -17,7 +17,15 @@ from hoseline.model.problem import Problem
 from hoseline.procedures.placement.hose_health import station_moments
 from hoseline.procedures.placement.result import ClipReaction, Result
 
-NEUTRAL_MARGIN = 1e-6  # margins below this fraction of EI/L^2 are rounding of an exact zero
+NEUTRAL_MARGIN = 1e-6  # margins below this fraction of the load scale (neutral_scale) are rounding of an exact zero
+
+
+def neutral_scale(props: RodProperties, clamps: Clamps, state: RodState) -> float:
+    """The size of the stability margin's terms, N (= N*mm/(rad^2*mm)): the largest of the
+    stiffness scale K/L^2, the hose's weight |q| L and the end force |F|.  A heavy, soft hose's
+    second variation is made of weight terms, so rounding is relative to them, not to EI/L^2."""
+    weight = float(np.linalg.norm(clamps.line_weight)) * props.length
+    return max(props.largest_stiffness / props.length**2, weight, float(np.linalg.norm(state.end_force)))
 
 
 def build_result(
@@ -51,7 +59,7 @@ def build_result(
     values, _ = smallest_eigenpairs(system.band, system.jac_t, count=1)
     margin = float(values[0]) / h  # per unit length: independent of the segment count
     events = list(log.events)
-    if abs(margin) < NEUTRAL_MARGIN * props.largest_stiffness / props.length**2:
+    if abs(margin) < NEUTRAL_MARGIN * neutral_scale(props, clamps, state):
         margin = 0.0
         events.append(
             "neutral stability: one way of deforming costs no energy (a symmetry of the mounts, e.g. "
