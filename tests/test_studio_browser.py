@@ -202,3 +202,16 @@ def _gizmo_handle(page):
             if page.evaluate("() => window.studio.fittings.gizmo.axis") in ("X", "Y", "Z"):
                 return point
     return None
+
+
+def test_the_segment_box_and_an_obstacle_clearance_are_sent_and_shown(studio_page):
+    page, errors, _ = studio_page
+    row = page.locator('#obstacle-list tr[data-obstacle="0"] input')
+    assert "strut" in page.locator('#obstacle-list tr[data-obstacle="0"]').inner_text()
+    state = drawn_after(page, lambda: (row.fill("30"), row.dispatch_event("change")))
+    assert state["readouts"]["min_clearance"][0]["required"] == 30.0
+    segments = page.locator("#segments")
+    state = drawn_after(page, lambda: (segments.fill("60"), segments.dispatch_event("change")))
+    assert state["hose"]["segments"] == 60 and len(state["centerline"]) == 61
+    assert drawn_centerline(page).shape == (61, 3)
+    assert errors == []

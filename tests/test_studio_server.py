@@ -308,3 +308,44 @@ def test_a_sweep_file_dropped_with_its_pose_table_opens_with_its_motion(client, 
     with client.websocket_connect("/ws") as ws:
         session, _ = opened(ws)
         assert session["name"] == "dropped sweep" and session["sweep"]["poses"] == len(motion.poses)
+
+
+def test_the_segment_count_places_again_and_each_obstacle_takes_its_own_clearance(client, problem):
+    strut = demo_sweep(steps_per_degree=0.1, segments=SEGMENTS).obstacles[0]
+    import trimesh
+    stl = trimesh.Trimesh(strut.vertices, strut.faces).export(file_type="stl")
+    assert client.post("/upload/strut.stl", content=stl).status_code == 200
+    with client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        ratio = np.array(state["clearance_ratio"])
+        ws.send_json({"type": "clearance", "seq": 1, "obstacle": 0, "required": 50.8})
+        stricter, _ = next_state(ws)
+        near = stricter["readouts"]["min_clearance"][0]
+        assert near["required"] == 50.8 and near["distance"] == state["readouts"]["min_clearance"][0]["distance"]
+        assert np.all(np.array(stricter["clearance_ratio"]) <= ratio + 1e-12)  # judged against twice the distance
+        assert np.min(stricter["clearance_ratio"]) == pytest.approx(min(near["distance"] / 50.8, 2.0), rel=1e-6)
+        ws.send_json({"type": "clearance", "seq": 2, "obstacle": 3, "required": 1.0})
+        _, others = next_state(ws)
+        assert "obstacle 3 does not exist" in others[0]["message"]
+        ws.send_json({"type": "clearance", "seq": 3, "obstacle": 0, "required": -1.0})
+        _, others = next_state(ws)
+        assert "0 to 100000 mm" in others[0]["message"]
+        ws.send_json({"type": "segments", "seq": 4, "segments": 2 * SEGMENTS})
+        finer, _ = next_state(ws)
+        assert finer["hose"]["segments"] == 2 * SEGMENTS and len(finer["centerline"]) == 2 * SEGMENTS + 1
+        coarse, fine = np.array(state["centerline"]), np.array(finer["centerline"])[::2]
+        assert np.max(np.linalg.norm(fine - coarse, axis=1)) < 0.01 * problem.hose.length  # the same shape, refined
+        assert finer["readouts"]["min_clearance"][0]["required"] == 50.8  # kept across the new placement
+        ws.send_json({"type": "segments", "seq": 5, "segments": 2})
+        kept, others = next_state(ws)
+        assert "hose.segments" in others[0]["message"] and kept["centerline"] == finer["centerline"]
+
+
+@pytest.mark.parametrize("message, fragment", [
+    ({"type": "segments", "seq": 1}, "give 'segments'"),
+    ({"type": "place", "seq": 1, "segments": 20}, "remove 'segments'"),
+    ({"type": "clearance", "seq": 1, "obstacle": 0}, "give 'required'"),
+])
+def test_commands_carry_exactly_the_fields_of_their_type(message, fragment):
+    with pytest.raises(ValueError, match=fragment):
+        parse_message(json.dumps(message))

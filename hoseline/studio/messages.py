@@ -9,6 +9,10 @@
         N*mm^2, dimensionless, kg/m.  pose: a pose of the open sweep (the fittings follow its
         bodies).  Targets coalesce: only the latest is solved.
     {"type": "place", "seq": 8}     run the placement sequence again from the straight hose
+    {"type": "segments", "seq": 9, "segments": 200}
+        cut the hose into this many segments and place it again (a discretisation is not continued)
+    {"type": "clearance", "seq": 10, "obstacle": 0, "required": 25.4}
+        the clearance (mm) required to obstacle number `obstacle` of the session message
 
 seq: a number the page counts up; each state message says which seq it has reached.
 """
@@ -79,10 +83,24 @@ class Target(_Message):
 
 
 class Command(_Message):
-    """An action that does not coalesce with others."""
+    """An action that does not coalesce with others (see the module docstring for each type's fields)."""
 
-    type: Literal["place"]
+    type: Literal["place", "segments", "clearance"]
     seq: int
+    segments: int | None = None
+    obstacle: int | None = None
+    required: float | None = None
+
+    @pydantic.model_validator(mode="after")
+    def _fields_of_its_type(self) -> "Command":
+        needed = {"place": (), "segments": ("segments",), "clearance": ("obstacle", "required")}[self.type]
+        for name in ("segments", "obstacle", "required"):
+            given = getattr(self, name) is not None
+            if given != (name in needed):
+                raise ValueError(f"{'give' if not given else 'remove'} '{name}' for a '{self.type}' message")
+        if self.required is not None and not math.isfinite(self.required):
+            raise ValueError("required: must be a finite clearance in mm")
+        return self
 
 
 def parse_message(text: str | bytes) -> Target | Command:
@@ -94,9 +112,9 @@ def parse_message(text: str | bytes) -> Target | Command:
     except ValueError as exc:
         raise MessageError(f"not JSON: {exc}") from None
     kind = data.get("type") if isinstance(data, dict) else None
-    model = {"set": Target, "place": Command}.get(kind)
+    model = {"set": Target, "place": Command, "segments": Command, "clearance": Command}.get(kind)
     if model is None:
-        raise MessageError(f"unknown message type {kind!r}: expected 'set' or 'place'")
+        raise MessageError(f"unknown message type {kind!r}: expected 'set', 'place', 'segments' or 'clearance'")
     try:
         return model.model_validate(data)
     except pydantic.ValidationError as exc:

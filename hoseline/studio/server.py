@@ -168,7 +168,12 @@ class Studio:
         error = None
         try:
             if isinstance(message, Command):
-                self.session.place_again()
+                if message.type == "segments":
+                    self.session.set_segments(message.segments)
+                elif message.type == "clearance":
+                    self.session.set_required_clearance(message.obstacle, message.required)
+                else:
+                    self.session.place_again()
             else:
                 self.session.apply(message)
         except REFUSED as exc:

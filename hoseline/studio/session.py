@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from hoseline.io.problem_file import ProblemFileError, problem_from_dict, problem_to_dict, problem_to_toml
+from hoseline.model import limits
 from hoseline.model.motion import Pose, quaternion_matrix
 from hoseline.model.problem import Problem
 from hoseline.model.sweep import DEFAULT_CLEARANCE, Obstacle, SweepProblem
@@ -111,6 +112,23 @@ class Session:
     def place_again(self) -> None:
         """Run the published placement sequence from the straight hose and continue from its result."""
         self._adopt(self.problem, solve(self.problem))
+
+    def set_segments(self, segments: int) -> None:
+        """Cut the hose into `segments` and place it again (a shape of one discretisation is not
+        continued into another): the fittings, length and twist stay as they are now."""
+        data = problem_to_dict(self.problem)
+        data["hose"]["segments"] = segments
+        problem = self._validated(data)
+        self._adopt(problem, solve(problem))
+
+    def set_required_clearance(self, index: int, required_mm: float) -> None:
+        """The clearance (mm) required to obstacle `index`: the colour map and readouts judge against it."""
+        if not 0 <= index < len(self.obstacles):
+            raise StudioError(f"obstacle {index} does not exist: there are {len(self.obstacles)}")
+        if not limits.within(required_mm, (0.0, limits.CLEARANCE_MM)):
+            raise StudioError(f"required clearance = {required_mm:g} mm: give 0 to {limits.CLEARANCE_MM:g} mm")
+        shown = self.obstacles[index]
+        self.obstacles[index] = replace(shown, obstacle=replace(shown.obstacle, clearance=float(required_mm)))
 
     def _adopt(self, problem: Problem, placement: Result) -> None:
         """Continue from a fresh placement of `problem`."""

@@ -24,6 +24,8 @@ const panel = new Panel({
   pose: (index) => { playing = false; send({ type: 'set', pose: index }); },
   play: () => { playing = !playing; if (playing) send({ type: 'set', pose: nextPose() }); },
   place: () => send({ type: 'place' }),
+  segments: (count) => send({ type: 'segments', segments: count }),
+  clearance: (obstacle, required) => send({ type: 'clearance', obstacle, required }),
   files: (files) => upload([...files]),
   runSweep,
 });

@@ -31,7 +31,8 @@ const sliderValue = (state, key) => (key === 'twist' ? state.twist : state.hose[
 
 export class Panel {
   /**
-   * on: { slider(key, value), typed(fitting, field, [x, y, z]), pose(index), play(), place(), files(FileList), runSweep() }
+   * on: { slider(key, value), typed(fitting, field, [x, y, z]), segments(count), clearance(obstacle, mm), pose(index),
+   *       play(), place(), files(FileList), runSweep() }
    */
   constructor(on) {
     this.on = on;
@@ -59,6 +60,11 @@ export class Panel {
         });
       }
     }
+    const segments = document.getElementById('segments');
+    segments.addEventListener('change', () => {
+      const count = Number(segments.value);
+      if (Number.isInteger(count)) on.segments(count); else this.message('segments: give a whole number', true);
+    });
     document.getElementById('place-again').addEventListener('click', () => on.place());
     const pose = document.getElementById('pose');
     pose.addEventListener('input', () => on.pose(Number(pose.value)));
@@ -79,6 +85,29 @@ export class Panel {
       pose.value = 0;
     }
     this.session = session;
+    this.obstacleList(session.obstacles);
+  }
+
+  /** One row per obstacle: its name, size and the clearance required to it (editable). */
+  obstacleList(obstacles) {
+    document.getElementById('obstacle-section').hidden = !obstacles.length;
+    document.getElementById('obstacle-list').replaceChildren(...obstacles.map((obstacle) => {
+      const tr = document.createElement('tr');
+      tr.dataset.obstacle = obstacle.id;
+      const name = document.createElement('td');
+      name.textContent = `${obstacle.name} (${obstacle.triangles} triangles)`;
+      const input = document.createElement('input');
+      Object.assign(input, { type: 'number', min: 0, step: 'any', value: exact(obstacle.required) });
+      input.addEventListener('change', () => {
+        const value = Number(input.value);
+        if (Number.isFinite(value) && value >= 0) this.on.clearance(obstacle.id, value);
+        else this.message(`${obstacle.name}: the required clearance is a distance of 0 mm or more`, true);
+      });
+      const cell = document.createElement('td');
+      cell.append(input);
+      tr.append(name, cell);
+      return tr;
+    }));
   }
 
   /** Show a state message: values, fittings, readouts. */
@@ -89,6 +118,13 @@ export class Panel {
       const value = sliderValue(state, key);
       if (document.activeElement !== range) range.value = Math.round(this.scales[key].toPosition(value));
       if (document.activeElement !== number) number.value = exact(value);
+    }
+    const segments = document.getElementById('segments');
+    if (document.activeElement !== segments) segments.value = state.hose.segments;
+    for (const row of document.querySelectorAll('#obstacle-list tr')) {
+      const near = state.readouts.min_clearance[Number(row.dataset.obstacle)];
+      const input = row.querySelector('input');
+      if (near && document.activeElement !== input) input.value = exact(near.required);
     }
     for (const row of document.querySelectorAll('table.fittings tr[data-fitting]')) {
       const fitting = state.fittings[row.dataset.fitting];
