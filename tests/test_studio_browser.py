@@ -215,3 +215,24 @@ def test_the_segment_box_and_an_obstacle_clearance_are_sent_and_shown(studio_pag
     assert state["hose"]["segments"] == 60 and len(state["centerline"]) == 61
     assert drawn_centerline(page).shape == (61, 3)
     assert errors == []
+
+
+def test_iges_mounts_under_other_labels_are_chosen_on_the_page(studio_page):
+    page, errors, _ = studio_page
+    from hoseline.demos.thesis_hose import THESIS_MOUNTS_IGES
+
+    text = Path(THESIS_MOUNTS_IGES).read_text()
+    for old, new in (("A", "P1"), ("B", "P2"), ("C", "P3"), ("D", "P4")):
+        text = text.replace(f" {old}       0D", f"{new}       0D")
+    transfer = page.evaluate_handle(
+        """(text) => { const transfer = new DataTransfer();
+            transfer.items.add(new File([text], 'fixture.igs')); return transfer; }""", text)
+    page.dispatch_event("#view", "drop", {"dataTransfer": transfer})
+    page.wait_for_selector("#labels:not([hidden])", timeout=20000)
+    for name, label in (("start_tip", "P2"), ("start_behind", "P1"), ("end_tip", "P4"), ("end_ahead", "P3")):
+        page.select_option(f'#labels select[name="{name}"]', label)
+    page.click('#labels button[type="submit"]')
+    page.wait_for_function("() => document.getElementById('status').textContent.includes('P2, P1, P4, P3')", timeout=30000)
+    refused = "no point labelled"
+    errors[:] = [error for error in errors if refused not in error and "400" not in error]
+    assert errors == []

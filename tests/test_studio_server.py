@@ -349,3 +349,21 @@ def test_the_segment_count_places_again_and_each_obstacle_takes_its_own_clearanc
 def test_commands_carry_exactly_the_fields_of_their_type(message, fragment):
     with pytest.raises(ValueError, match=fragment):
         parse_message(json.dumps(message))
+
+
+def test_an_iges_file_without_the_thesis_labels_offers_its_labels_and_takes_the_chosen_ones(client, problem):
+    text = open(THESIS_MOUNTS_IGES).read()
+    for old, new in (("A", "P1"), ("B", "P2"), ("C", "P3"), ("D", "P4")):
+        text = text.replace(f" {old}       0D", f"{new}       0D")  # the label is right-aligned in columns 57-64
+    asked = client.post("/upload/fixture.igs", content=text.encode())
+    assert asked.status_code == 400 and asked.json()["labels"] == ["P1", "P2", "P3", "P4"]
+    assert "no point labelled B, A, D, C" in asked.json()["error"]
+    bad = client.post("/upload/fixture.igs?labels=P2,P1", content=text.encode())
+    assert bad.status_code == 400 and "four point labels" in bad.json()["error"] and "labels" not in bad.json()
+    chosen = client.post("/upload/fixture.igs?labels=P2,P1,P4,P3", content=text.encode())
+    assert chosen.status_code == 200 and "P2, P1, P4, P3" in chosen.json()["message"]
+    placed = problem_from_dict(tomllib.loads(client.get("/problem.toml").text))
+    from hoseline.io.iges_mounts import mounts_from_iges
+    start, end = mounts_from_iges(THESIS_MOUNTS_IGES)  # the same points under the thesis' labels
+    np.testing.assert_allclose(placed.start.point, start.point)
+    np.testing.assert_allclose(placed.end.direction, end.direction)

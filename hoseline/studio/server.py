@@ -48,7 +48,7 @@ from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.studio.inbox import Inbox
 from hoseline.studio.messages import Command, MessageError, parse_message
 from hoseline.studio.session import Session, StudioError
-from hoseline.studio.uploads import MAX_FILES, SIZE_LIMITS, UploadError, checked_name, open_upload
+from hoseline.studio.uploads import MAX_FILES, SIZE_LIMITS, UploadError, checked_name, mount_labels, open_upload
 
 STATIC = Path(__file__).parent / "static"
 IDLE_SECONDS = 0.3
@@ -231,14 +231,16 @@ class Studio:
             return JSONResponse({"error": "uploads come from the studio's own page only"}, status_code=403)
         try:
             name, kind = checked_name(request.path_params["name"])
+            labels = mount_labels(request.query_params.get("labels"))
             if len(list(self.uploads.iterdir())) >= MAX_FILES:
                 raise UploadError(f"more than {MAX_FILES} files uploaded in this session: restart the studio", 413)
             data = await _body(request, SIZE_LIMITS[kind], name)
             path = self.uploads / name
             path.write_bytes(data)
-            done = await self.run(open_upload, self.session, path, kind, request.query_params.get("store") == "1")
+            done = await self.run(open_upload, self.session, path, kind, request.query_params.get("store") == "1", labels)
         except UploadError as exc:
-            return JSONResponse({"error": str(exc)}, status_code=exc.status)
+            answer = {"error": str(exc)} | ({"labels": exc.labels} if exc.labels is not None else {})
+            return JSONResponse(answer, status_code=exc.status)
         except PlacementError as exc:
             return JSONResponse({"error": f"{name}: read, but the hose cannot be placed: {exc}"}, status_code=422)
         await self.changed()

@@ -125,14 +125,20 @@ async function upload(files) {
   const main = files.filter((file) => file.name.toLowerCase().endsWith('.toml'));
   const ordered = main.length ? [...files.filter((file) => !main.includes(file)).map((file) => [file, true]), ...main.map((file) => [file, false])]
     : files.map((file) => [file, false]);
-  for (const [file, store] of ordered) {
-    try {
-      const response = await fetch(`/upload/${encodeURIComponent(file.name)}${store ? '?store=1' : ''}`, { method: 'POST', body: file });
-      const answer = await response.json();
-      if (response.ok) panel.message(answer.message); else panel.message(answer.error, true);
-    } catch (error) {
-      panel.message(`${file.name}: ${error}`, true);
+  for (const [file, store] of ordered) await sendFile(file, store ? '?store=1' : '');
+}
+
+/** Post one file; an IGES file without the thesis' labels gets its labels offered to choose from. */
+async function sendFile(file, query) {
+  try {
+    const response = await fetch(`/upload/${encodeURIComponent(file.name)}${query}`, { method: 'POST', body: file });
+    const answer = await response.json();
+    if (response.ok) panel.message(answer.message); else panel.message(answer.error, true);
+    if (answer.labels) {
+      panel.chooseLabels(file.name, answer.labels, (chosen) => sendFile(file, `?labels=${encodeURIComponent(chosen.join(','))}`));
     }
+  } catch (error) {
+    panel.message(`${file.name}: ${error}`, true);
   }
 }
 

@@ -192,6 +192,20 @@ export class Panel {
     }
   }
 
+  /** Ask which of an IGES file's point labels make the fittings; `use([startTip, startBehind, endTip, endAhead])`. */
+  chooseLabels(fileName, labels, use) {
+    const form = document.getElementById('labels');
+    document.getElementById('labels-file').textContent = fileName;
+    const selects = ['start_tip', 'start_behind', 'end_tip', 'end_ahead'].map((name) => form.elements[name]);
+    selects.forEach((select, k) => {
+      select.replaceChildren(...labels.map((label) => new Option(label, label)));
+      select.selectedIndex = Math.min(k, labels.length - 1);
+    });
+    form.hidden = false;
+    form.onsubmit = (event) => { event.preventDefault(); form.hidden = true; use(selects.map((select) => select.value)); };
+    document.getElementById('labels-cancel').onclick = () => { form.hidden = true; };
+  }
+
   message(text, error = false) {
     const list = document.getElementById('messages');
     const item = document.createElement('li');
