@@ -4,9 +4,10 @@
 
 The thesis brake hose (100 segments, 180 degrees of twist) placed without clips, then with one
 clip of each kind at station 50, where the hose without clips passes (its point and tangent
-there).  Prints the median wall time of solve() (with the uniqueness checks; the error estimate
-included) and of one Newton iteration's assembly and bordered solve, and their ratios to the
-hose without clips, with the machine's load.
+there; the sliding clip started 2 stations further on).  Prints the median wall time of solve()
+(with the uniqueness checks; the error estimate included) and of one Newton iteration's assembly
+and bordered solve, and their ratios to the hose without clips, the continuation steps and Newton
+iterations, with the machine's load; for the sliding clip the arc length it found (mm).
 """
 
 from __future__ import annotations
@@ -48,14 +49,14 @@ def iteration_time(problem, result, repeats: int) -> float:
     """Median time of one Newton iteration's work (assembly and bordered solve) at the placed shape, s."""
     props = rod_properties(problem)
     clamps = PlacementPath(problem).place(1.0)
-    state = RodState(result.frames, result.end_force)
+    state = RodState(result.frames, result.end_force, clip_arc_lengths=np.array([c.arc_length for c in result.clips]))
 
     def iterate():
         system = evaluate(props, clamps, state)
         if clamps.clips:
             from hoseline.mechanics.clipped_newton import _step
 
-            _step(system, 0.0)
+            _step(system, 0.0)  # with a sliding clip: the wider border of its arc length
         else:
             _step_kernel(system.band, system.jac_t, system.grad, system.constraint, 0.0, True)
 
@@ -71,9 +72,9 @@ def main() -> None:
     station, h = 50, plain.hose.segment_length
     tangent = free.frames[station - 1, 2] + free.frames[station, 2]
     cases = [("no clip", plain)] + [
-        (kind, replace(plain, clips=(Clip(kind, free.centerline[station], station * h,
+        (kind, replace(plain, clips=(Clip(kind, free.centerline[station], (station + 2 * (kind == "sliding")) * h,
                                           None if kind == "ball" else tangent),)))
-        for kind in ("fixed", "rotating", "ball")
+        for kind in ("fixed", "rotating", "sliding", "ball")
     ]
     print(f"thesis hose, 100 segments, 180 deg; median of {args.repeats}; load average {os.getloadavg()[0]:.1f}")
     base_solve = base_iteration = None
@@ -83,9 +84,10 @@ def main() -> None:
         iteration = iteration_time(problem, result, args.repeats)
         base_solve = base_solve or placement
         base_iteration = base_iteration or iteration
+        found = f", arc length {result.clips[0].arc_length:.4f} mm (free hose: {station * h:.4f})" if label == "sliding" else ""
         print(f"{label:>9}: placement {placement * 1e3:8.1f} ms ({placement / base_solve:4.2f}x), "
               f"iteration {iteration * 1e6:7.1f} us ({iteration / base_iteration:4.2f}x), "
-              f"{result.iterations} Newton iterations")
+              f"{result.steps} steps, {result.iterations} Newton iterations{found}")
 
 
 if __name__ == "__main__":

@@ -9,6 +9,9 @@
    2 workers.  Target: 300 s.
 3. Scaling: --scaling placement samples on 1 and on 2 workers, --repeats times each, both starts;
    medians of samples per second and the ratio.
+4. Sensitivities of the demo sweep (every pose, the tolerances below) in this process, --repeats
+   times, beside one sample of the same sweep: the median of each and their ratio (what the first
+   order costs in samples).
 Tolerances: the end mount within a 1 mm sphere, its direction within a 2 degree cone, the length
 +-1 mm (normal) and -4..+2 % under pressure, EI by a factor 2 (lognormal), the clocking +-3 degrees.
 Times are the batches from the first submission to the last result (the cluster started and the
@@ -33,6 +36,7 @@ from hoseline.demos.thesis_hose import demo_problem  # noqa: E402
 from hoseline.procedures.variation.designs import unit_design  # noqa: E402
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size  # noqa: E402
 from hoseline.procedures.variation.samples import StudyBase, nominal_context  # noqa: E402
+from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities  # noqa: E402
 from hoseline.procedures.variation.tolerances import Tolerance, Variation  # noqa: E402
 
 TOLERANCES = Variation((
@@ -104,6 +108,20 @@ def main() -> None:
               f"with the cluster's start), {failed} failed, worker CPU {1e3 * cpu:.0f} ms per sample (idle 2 cores: "
               f"{options.sweeps * cpu / 2:.0f} s); target 300 s for 1000: ratio "
               f"{batches / (300.0 * options.sweeps / 1000):.2f}   ({load()})")
+    if options.repeats:
+        sensitivities, sample = [], []
+        for _ in range(options.repeats + 1):  # the first run loads the compiled kernels: not counted
+            tick = time.perf_counter()
+            sweep_sensitivities(sweep, TOLERANCES.varied)
+            sensitivities.append(time.perf_counter() - tick)
+            tick = time.perf_counter()
+            sweep_base.read(sweep.problem)
+            sample.append(time.perf_counter() - tick)
+        first, one = statistics.median(sensitivities[1:]), statistics.median(sample[1:])
+        print(f"sweep sensitivities: {len(TOLERANCES.varied)} coordinates over {sweep.pose_count} poses in {first:.2f} s "
+              f"(median of {options.repeats}), one sample of the sweep {one:.2f} s: the first order costs "
+              f"{first / one:.1f} samples   ({load()})")
+
 
 if __name__ == "__main__":
     main()

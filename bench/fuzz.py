@@ -51,6 +51,12 @@ def campaign(kind: str, examples: int, out: Path, timeout: int, random_seed: int
 
     Failing inputs are kept under out/failures/.
     """
+    from hoseline.procedures.compile_kernels import compile_kernels
+
+    # compile (or load) the solver before any input's watchdog runs: a first compilation on a cold cache
+    # under load can outlast the watchdog, and an alarm inside Numba's compiler leaves it broken (seen as
+    # "no compiled object yet" on the next input), which is the harness's failure, not the program's
+    compile_kernels(clearance=True)
     counts: Counter = Counter()
     number = 0
     started = time.perf_counter()

@@ -148,3 +148,14 @@ def test_neutral_margin_is_relative_to_the_weight_of_a_heavy_soft_hose():
     heavy = Clamps(np.zeros(3), np.eye(3), None, None, False, line_weight=np.array([0.0, 0.0, -0.05]))  # N/mm
     assert neutral_scale(Props, heavy, state) == pytest.approx(0.05 * 1000.0)
     assert NEUTRAL_MARGIN * neutral_scale(Props, heavy, state) > 3e-12 > NEUTRAL_MARGIN * 0.17 / 1000.0**2
+
+
+def test_a_mesh_whose_vertices_are_not_3d_points_is_refused_by_the_reader():
+    """An OBJ with a damaged line (found by the fuzz campaign) that trimesh reads as 2D vertices:
+    refused by read_mesh, not a traceback in the clearance tree."""
+    from pathlib import Path
+
+    from hoseline.io.obstacle_mesh import ObstacleFileError, read_mesh
+
+    with pytest.raises(ObstacleFileError, match=r"vertices of shape \(13, 2\).*export the mesh again"):
+        read_mesh(Path(__file__).parent / "data" / "fuzz_damaged_vertex.obj")

@@ -367,3 +367,10 @@ def test_an_iges_file_without_the_thesis_labels_offers_its_labels_and_takes_the_
     start, end = mounts_from_iges(THESIS_MOUNTS_IGES)  # the same points under the thesis' labels
     np.testing.assert_allclose(placed.start.point, start.point)
     np.testing.assert_allclose(placed.end.direction, end.direction)
+
+
+def test_a_problem_with_end_fittings_is_refused_until_the_page_can_edit_them(client, problem):
+    text = problem_to_toml(problem) + "\n[fittings.start]\nlength = 20.0\n"
+    refused = client.post("/upload/fitted.toml", content=text.encode())
+    assert refused.status_code == 400 and "does not take end fittings yet" in refused.json()["error"]
+    assert "[fittings" not in client.get("/problem.toml").text  # the session is untouched

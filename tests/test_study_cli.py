@@ -181,7 +181,10 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
     sweep = load_sweep(out / "worst" / "clearance_post" / "sweep.toml")
     again = run_sweep(sweep)
     assert again.clearances[0].distance.min() == pytest.approx(values[worst, 0], rel=1e-6)
-    assert "placements only" in " ".join(summary["notes"])
+    # the sensitivities of the sweep's quantities (its extremes over the poses), per varied coordinate
+    rows = list(csv.DictReader((out / "sensitivities.csv").open(encoding="utf-8")))
+    assert [row["coordinate"] for row in rows] == ["end.x", "end.y", "end.z", "end.twist"]
+    assert "d clearance:post [mm per unit]" in rows[0] and "first_order" in summary
 
 
 @pytest.mark.parametrize("change, message", [
@@ -219,3 +222,39 @@ def test_help_lists_the_study_command():
     result = CliRunner().invoke(app, ["--help"])
     assert "study" in result.output
     assert Path(__file__).name  # keep pytest from treating this module as empty when filtered
+
+
+DESIGN_SECTION = """
+[design]
+lengths = [325.0, 335.0]
+length_step = 10.0
+clockings = [-40.0, 40.0]
+clocking_step = 40.0
+rank_by = "bend_radius"
+method = "optimise"
+"""
+
+
+def test_a_design_search_with_the_optimiser_writes_its_ranking(tmp_path):
+    """[design] method = "optimise": one candidate per length in design.csv, with where its clocking comes from,
+    the grid beside it in design_grid.csv, the optimiser's runs in summary.json; a misspelt method is refused."""
+    (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(0.0, 20)), encoding="utf-8")
+    text = PLACEMENT_STUDY.replace("samples = 16", "samples = 4") + DESIGN_SECTION
+    (tmp_path / "study.toml").write_text(text.replace("end_torque = 2500.0", "end_torque = 1e6"), encoding="utf-8")
+    result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"), "--workers", "0", "-q")
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "out"
+    rows = list(csv.DictReader((out / "design.csv").open(encoding="utf-8")))
+    grid = list(csv.DictReader((out / "design_grid.csv").open(encoding="utf-8")))
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert len(grid) == 6 and summary["design"]["method"] == "optimise"
+    assert sorted(float(row["length_mm"]) for row in rows) == [325.0, 335.0]
+    assert all(row["clocking from"] in ("optimiser", "grid") for row in rows)
+    for row in rows:  # never worse than the grid's best cell of its length
+        cells = [float(g["margin bend_radius [mm]"]) for g in grid if float(g["length_mm"]) == float(row["length_mm"])]
+        assert float(row["margin bend_radius [mm]"]) >= max(cells) - 1e-9
+    assert len(summary["design"]["optimiser"]) == 2
+    assert "Optimiser:" in (out / "report.html").read_text(encoding="utf-8")
+    (tmp_path / "study.toml").write_text(text.replace('"optimise"', '"optimize"'), encoding="utf-8")
+    result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out2"), "--workers", "0")
+    assert result.exit_code == 2 and "design.method" in result.output.replace("\n", " ")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+from dataclasses import replace
 import sys
 import time
 from pathlib import Path
@@ -18,7 +19,9 @@ from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import problem_to_toml
 from hoseline.io.study_results import PartialStore
 from hoseline.procedures.variation import engine
+from hoseline.procedures.variation.design_search import DesignGrid
 from hoseline.procedures.variation.engine import Where
+from hoseline.procedures.variation.quantities import Limit, quantities
 from hoseline.procedures.variation.run import run_study
 from hoseline.procedures.variation.samples import StudyBase
 from hoseline.procedures.variation.study import Sampling, Study
@@ -68,12 +71,18 @@ def _same(a: dict, b: dict) -> None:
 
 
 def test_local_cluster_gives_the_numbers_of_one_process():
-    """Two worker processes of a LocalCluster, batches finishing in any order: the same numbers, bit for bit."""
-    study = _study()
+    """Two worker processes of a LocalCluster, batches finishing in any order: the same numbers, bit for bit,
+    the design search's optimiser (one task per length) included."""
+    bend = quantities(())[0]
+    study = replace(_study(), limits=(Limit(bend, 30.0),),
+                    design=DesignGrid((325.0, 335.0), (-40.0, 0.0, 40.0), "bend_radius", method="optimise"))
     alone = run_study(study, where=Where(workers=0))
     spread = run_study(study, where=Where(workers=2))
     _same(alone.samples, spread.samples)
     assert spread.run["where"] == "Dask LocalCluster, 2 worker processes"
+    assert [(r.length, r.clocking) for r in alone.design.refined] == [(r.length, r.clocking) for r in spread.design.refined]
+    assert all(np.array_equal(a.margins, b.margins) for a, b in zip(alone.design.refined, spread.design.refined))
+    assert len(alone.design.refined) == 2
 
 
 def _problem_dir(tmp_path: Path) -> Path:

@@ -51,6 +51,8 @@ def solve_command(
             exported = write_exports(result, staging, formats)
     if not quiet:
         Console().print(summary_table([result], [problem.name]))
+        if problem.fittings is not None:
+            print_lengths(problem)
         Console().print(f"wrote {out / 'centerline.csv'} and {out / 'result.json'}")
         print_exports(out, exported)
 
@@ -73,6 +75,14 @@ def export_formats(text: str) -> list[str]:
         return parse_formats(text)
     except ValueError as exc:
         raise fail(f"--export {text}: {exc}", BAD_INPUT) from None
+
+
+def print_lengths(problem) -> None:
+    """The free (cut) length and the catalogue's overall length of a hose with end fittings, mm."""
+    fittings = problem.fittings
+    parts = " + ".join(f"{fitting.length_allowance:.2f} ({name})" for name, _, fitting in fittings.pieces())
+    Console().print(f"free length {problem.hose.length:.2f} mm, overall length "
+                    f"{fittings.overall_length(problem.hose.length):.2f} mm (the fittings add {parts} mm)")
 
 
 def print_exports(folder: Path, files) -> None:

@@ -27,7 +27,7 @@ def studio_command(
     """Place a hose by hand in the browser: drag the fittings, move sliders, play a sweep; the shape follows."""
     from hoseline.procedures.placement.continuation import PlacementError
     from hoseline.studio.launch import bind, serve
-    from hoseline.studio.session import Session
+    from hoseline.studio.session import Session, StudioError
 
     if not 0 <= port <= 65535:
         raise fail(f"--port {port}: give a port from 0 to 65535", BAD_INPUT)
@@ -35,6 +35,8 @@ def studio_command(
     problem, sweep = _read(file)
     try:
         session = Session(problem) if sweep is None else Session(sweep=sweep)
+    except StudioError as exc:
+        raise fail(f"{file}: {exc}", BAD_INPUT) from None
     except PlacementError as exc:
         raise fail(f"the solver failed: {exc}", SOLVER_FAILED) from None
     try:

@@ -13,17 +13,29 @@ What the thesis' generator wrote (Thomas 2004, chapter II and appendix D), at th
   BeamSection; the beams are pre-bent and pre-twisted: their markers carry the solved frames;
 - fixed joints from the first part (at the start tip) and the last part (at the end tip) to
   markers on ground; gravity when the problem has it; mass properties when the hose has mass;
-- a joint per clip (CLIP_JOINTS: fixed, revolute for a rotating clip, spherical for a ball
-  clip) from the base marker of the part that starts at the clip station to a ground marker
-  clip_<n> there, with the part's axes (so the joint is assembled at the solved shape; the
-  revolute axis is then the part's z, within half a joint angle of the clip direction).
+- a joint per clip (CLIP_JOINTS: fixed, revolute for a rotating clip, cylindrical for a sliding
+  clip, spherical for a ball clip) from the base marker of the part that starts at the clip
+  station to a ground marker clip_<n> there, with the part's axes (so the joint is assembled at
+  the solved shape; the revolute or cylindrical axis is then the part's z, within half a joint
+  angle of the clip direction).  A cylindrical joint lets that one part slide along the axis: the
+  guide ring for small motions (the material passing through the ring is not modelled; the parts
+  keep the hose's nominal segment length where a sliding clip stretched its spans);
+- a rigid part per end fitting (model/fittings.py), fitting_start / fitting_end: placed at the
+  port with z along the port direction, its centreline as a polyline, fixed to a ground marker
+  at the port (fix_fitting_start / _end); the hose's end part is then fixed to the fitting's
+  outlet marker instead of ground.  Fitting parts carry no cylinder, so read_adams_cmd and
+  hose_from_adams still find the hose parts alone;
+- with stiffeners (model/stiffeners.py), the thesis' off-axis springs between adjacent parts
+  as its line forces (Figure 27): one spline of force against marker distance and a
+  single_component_force AKISPL(DM(I, J), 0, spline, 0) per spring (_stiffener_springs).
 
 Units mm, kg, N, s, degrees.  The commands and parameter names follow the ADAMS/View command
 language as ADAMS/View itself writes .cmd files; the file was checked against that
 documentation and read back here, never run in ADAMS.
 
 read_adams_cmd() reads the parts, markers and cylinders of such a file (ours, or one saved by
-ADAMS/View after a simulation) and hose_from_adams() turns them back into stations and frames.
+ADAMS/View after a simulation) and hose_from_adams() turns them back into stations and frames;
+stiffeners_from_adams() gives back the stiffener springs (count, angle, table).
 """
 
 from __future__ import annotations
@@ -35,7 +47,9 @@ from pathlib import Path
 
 import numpy as np
 
+from hoseline.mechanics.rotations import frame_from_tangent
 from hoseline.model.hose import DEFAULT_POISSON_RATIO, Hose
+from hoseline.model.stiffeners import SpringTable, Stiffeners
 from hoseline.procedures.placement.result import Result
 
 LENGTH_UNITS_MM = {"mm": 1.0, "cm": 10.0, "meter": 1000.0, "km": 1.0e6, "inch": 25.4, "foot": 304.8}
@@ -130,7 +144,7 @@ def _about_x(angle: float) -> np.ndarray:
 # --- writing ---
 
 
-CLIP_JOINTS = {"fixed": "fixed", "rotating": "revolute", "ball": "spherical"}  # clip type -> ADAMS joint
+CLIP_JOINTS = {"fixed": "fixed", "rotating": "revolute", "sliding": "cylindrical", "ball": "spherical"}  # clip type -> ADAMS joint
 
 
 def adams_cmd_text(result: Result, section: BeamSection | None = None) -> str:
@@ -223,6 +237,8 @@ def adams_cmd_text(result: Result, section: BeamSection | None = None) -> str:
             izz=_number(section.izz),
         )
 
+    _stiffener_springs(out, ids, model, parts, hose)
+    holders = _fitting_parts(out, ids, model, result, frames)
     out.comment("the end parts held by the fittings")
     for joint, marker, ground in (
         ("fix_start", f"{parts[0]}.base", "start_fitting"),
@@ -233,7 +249,7 @@ def adams_cmd_text(result: Result, section: BeamSection | None = None) -> str:
             joint_name=f"{model}.{joint}",
             adams_id=ids.next("joint"),
             i_marker_name=marker,
-            j_marker_name=f"{model}.ground.{ground}",
+            j_marker_name=holders.get(ground, f"{model}.ground.{ground}"),
         )
     _clip_joints(out, ids, model, parts, result, frames)
     if np.any(problem.gravity != 0.0):
@@ -248,14 +264,113 @@ def adams_cmd_text(result: Result, section: BeamSection | None = None) -> str:
     return out.text()
 
 
+def _stiffener_springs(out: "_Commands", ids: "_Ids", model: str, parts: list[str], hose: Hose) -> None:
+    """The thesis' off-axis springs between adjacent parts (Thomas 2004, equations 9-16), as its line forces.
+
+    The thesis' Figure 27 form: one spline for all springs (data_element create spline, linear
+    extrapolation) giving the force in N against the distance of the spring's two markers in mm,
+    the table's zero deformation moved to the free length and tension negative (ADAMS counts a
+    positive single-component force as pushing the markers apart); each spring a
+    single_component_force with function AKISPL(DM(I, J), 0, spline, 0) between a marker on
+    each part, at the anchors of Stiffeners.anchors in the part's section plane through its
+    centre.  The thesis reports this form identical to its spring elements, whose commands the
+    OCR does not show.  ADAMS interpolates the spline by Akima's method, hoseline's solver
+    linearly between the same points.  The joints at the fittings carry no springs here (the
+    end parts are fixed to the fittings), as in the thesis' model.
+    """
+    stiffeners = hose.stiffeners
+    if stiffeners is None:
+        return
+    h = hose.segment_length
+    anchors = stiffeners.anchors(hose.outer_radius, h, h)  # relative to the node between two parts
+    free = float(np.linalg.norm(anchors[0, 1] - anchors[0, 0]))  # element / sin(angle), the same for every spring
+    spline = f"{model}.spring_table"
+    out.comment(
+        f"stiffener springs: {stiffeners.springs} between each two adjacent parts at {stiffeners.angle_deg:g} deg "
+        "to the section plane,",
+        f"line forces along a spline of force (N, tension negative) against marker distance (mm); free length {free:.9g} mm",
+    )
+    out.command(
+        "data_element create spline",
+        spline_name=spline,
+        adams_id=ids.next("spline"),
+        x=_vector(free + np.asarray(stiffeners.table.deformation)),
+        y=_vector(0.0 - np.asarray(stiffeners.table.force)),  # 0.0 - : no "-0.0"
+        linear_extrapolate="yes",
+    )
+    centre = np.array([0.0, 0.0, 0.5 * h])  # from the node to the part centres: anchors -> part frames
+    for index, part in enumerate(parts):
+        out.command("defaults coordinate_system", default_coordinate_system=part)
+        for j in range(stiffeners.springs):
+            if index + 1 < len(parts):
+                _place(out, ids, "marker", f"{part}.spring_{j + 1:02d}_next", anchors[j, 0] + centre, np.eye(3))
+            if index > 0:
+                _place(out, ids, "marker", f"{part}.spring_{j + 1:02d}_prev", anchors[j, 1] - centre, np.eye(3))
+    out.command("defaults coordinate_system", default_coordinate_system=f"{model}.ground")
+    digits = len(str(len(parts)))
+    for index in range(len(parts) - 1):
+        for j in range(stiffeners.springs):
+            i_marker, j_marker = f"{parts[index + 1]}.spring_{j + 1:02d}_prev", f"{parts[index]}.spring_{j + 1:02d}_next"
+            out.command(
+                "force create direct single_component_force",
+                single_component_force_name=f"{model}.spring_{index + 1:0{digits}d}_{j + 1:02d}",
+                adams_id=ids.next("force"),
+                type_of_freedom="translational",
+                i_marker_name=i_marker,
+                j_marker_name=j_marker,
+                action_only="off",
+                function=f'"AKISPL(DM({i_marker}, {j_marker}), 0, {spline}, 0)"',
+            )
+
+
+def _fitting_parts(out: "_Commands", ids: "_Ids", model: str, result: Result, frames: np.ndarray) -> dict[str, str]:
+    """One rigid part per end fitting, fixed to ground at its port; returns {ground marker name of the hose end:
+    the fitting's outlet marker that holds the hose instead}."""
+    fittings = result.problem.fittings
+    if fittings is None:
+        return {}
+    holders = {}
+    for name, port, fitting in fittings.pieces():
+        part = f"{model}.fitting_{name}"
+        axes = frame_from_tangent(port.direction).T  # columns x, y, z; z along the port direction
+        if fitting.bend_angle_deg:
+            bend = fitting.bend_direction(port)
+            axes = np.column_stack([bend, np.cross(port.direction, bend), port.direction])
+        hose_end = frames[0] if name == "start" else frames[-1]
+        outlet = fitting.outlet(port).point
+        out.comment(f"the {name} fitting: a rigid part fixed to ground at its port")
+        out.command("defaults coordinate_system", default_coordinate_system=f"{model}.ground")
+        _place(out, ids, "marker", f"{model}.ground.{name}_port", port.point, axes)
+        _place(out, ids, "part", part, port.point, axes)
+        _place(out, ids, "marker", f"{part}.port", port.point, axes)
+        _place(out, ids, "marker", f"{part}.outlet", outlet, hose_end)
+        local = (fitting.centreline(port) - port.point) @ axes  # in the part's frame
+        out.command(
+            "geometry create curve polyline",
+            polyline_name=f"{part}.centreline",
+            adams_id=ids.next("geometry"),
+            location=", ".join(_vector(point) for point in local),
+            relative_to=part,
+            close="no",
+        )
+        out.command(
+            "constraint create joint fixed",
+            joint_name=f"{model}.fix_fitting_{name}",
+            adams_id=ids.next("joint"),
+            i_marker_name=f"{part}.port",
+            j_marker_name=f"{model}.ground.{name}_port",
+        )
+        holders[f"{name}_fitting"] = f"{part}.outlet"
+    return holders
+
+
 def _clip_joints(out: "_Commands", ids: "_Ids", model: str, parts: list[str], result: Result, frames: np.ndarray) -> None:
     """One joint per clip, from the base of the part starting at the clip station to a ground marker there."""
     if not result.clips:
         return
     out.comment("the clips: one joint each at its station")
-    h = result.problem.hose.segment_length
     for number, clip in enumerate(result.clips, start=1):
-        node = round(clip.arc_length / h)
+        node = int(np.argmin(np.abs(result.s - clip.arc_length)))  # the station (a sliding clip's is where it came to rest)
         out.command("defaults coordinate_system", default_coordinate_system=f"{model}.ground")
         _place(out, ids, "marker", f"{model}.ground.clip_{number}", result.centerline[node], frames[node])
         out.command(
@@ -345,11 +460,16 @@ class AdamsModel:
 
     parts, markers: full name -> (position, rotation), in the world (ground) frame, in file order.
     cylinders: part name -> (centre marker name, length in mm).
+    splines: name -> (x, y) of each data_element spline, x in the length unit (mm), y as written.
+    spline_forces: single-component force name -> (I marker, J marker, spline name) of the forces
+    whose function is AKISPL(DM(I, J), 0, spline[, 0]) (the stiffener springs).
     """
 
     parts: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     markers: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     cylinders: dict[str, tuple[str, float]] = field(default_factory=dict)
+    splines: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    spline_forces: dict[str, tuple[str, str, str]] = field(default_factory=dict)
 
 
 def read_adams_cmd(path: str | Path) -> AdamsModel:
@@ -389,7 +509,59 @@ def read_adams_cmd(path: str | Path) -> AdamsModel:
             name = _name(where, parameters, "cylinder_name")
             length = _reals(where, parameters, "length", 1, length_mm)[0]
             model.cylinders[name.rsplit(".", 1)[0]] = (_name(where, parameters, "center_marker"), length)
+        elif command == "data_element create spline":
+            name = _name(where, parameters, "spline_name")
+            x = _reals(where, parameters, "x", len(parameters.get("x", [])), length_mm)
+            y = _reals(where, parameters, "y", len(x), 1.0)
+            model.splines[name] = (x, y)
+        elif command == "force create direct single_component_force":
+            found = _SPLINE_FORCE.fullmatch(re.sub(r"\s+", "", " ".join(parameters.get("function", [])).strip('"')))
+            if found:
+                model.spline_forces[_name(where, parameters, "single_component_force_name")] = tuple(
+                    name.lstrip(".") for name in found.groups())
     return model
+
+
+_SPLINE_FORCE = re.compile(r"AKISPL\(DM\(([^,()]+),([^,()]+)\),0(?:\.0*)?,([^,()]+?)(?:,0(?:\.0*)?)?\)", re.IGNORECASE)
+
+
+def stiffeners_from_adams(model: AdamsModel) -> Stiffeners | None:
+    """The stiffener springs of a model read by read_adams_cmd (as _stiffener_springs writes them), or None.
+
+    The count is the springs between each pair of adjacent parts; the free length L0 is the
+    distance of a spring's markers with the two parts' frames laid end to end along z (the
+    straight hose), the angle asin(h / L0) with h the parts' cylinder length; the table is
+    the spline with the free length taken off the distances and the sign turned back to
+    tension positive.  Raises AdamsFileError for springs that do not share one spline or one count.
+    """
+    if not model.spline_forces:
+        return None
+    pairs: dict[tuple[str, str], list[tuple[str, str]]] = {}
+    splines = set()
+    for i_marker, j_marker, spline in model.spline_forces.values():
+        parts = (j_marker.rsplit(".", 1)[0], i_marker.rsplit(".", 1)[0])
+        pairs.setdefault(parts, []).append((j_marker, i_marker))
+        splines.add(spline)
+    counts = {len(springs) for springs in pairs.values()}
+    if len(splines) != 1 or len(counts) != 1:
+        raise AdamsFileError(f"stiffener springs: found {len(splines)} splines and counts {sorted(counts)} per pair of "
+                             "parts: hoseline reads one spline and one count for all")
+    (inboard, outboard), springs = next(iter(pairs.items()))
+    missing = [name for name in (inboard, outboard, *(m for pair in springs for m in pair))
+               if name not in model.parts and name not in model.markers]
+    if missing or inboard not in model.cylinders or splines.pop() not in model.splines:
+        raise AdamsFileError(f"stiffener springs: parts, markers or the spline of {inboard} - {outboard} are not defined")
+    h = model.cylinders[inboard][1]
+
+    def in_part(marker: str, part: str) -> np.ndarray:
+        (origin, axes), (position, _) = model.parts[part], model.markers[marker]
+        return axes.T @ (position - origin)
+
+    j_marker, i_marker = springs[0]
+    free = float(np.linalg.norm(in_part(i_marker, outboard) + np.array([0.0, 0.0, h]) - in_part(j_marker, inboard)))
+    x, y = model.splines[next(iter(model.spline_forces.values()))[2]]
+    table = SpringTable(tuple(x - free), tuple(-y))
+    return Stiffeners(len(springs), math.degrees(math.asin(min(1.0, h / free))), table)
 
 
 def hose_from_adams(model: AdamsModel) -> tuple[np.ndarray, np.ndarray]:

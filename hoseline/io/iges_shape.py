@@ -6,7 +6,9 @@ Entities, all built and written by OpenCASCADE's IGES writer, unit mm, with labe
   the segment centres to the end fitting tip;
 - 100 circle "PROFILE": the hose's outer radius, centred on the start tip on the plane
   normal to the hose there, placed in space by a 124 transformation matrix;
-- 126 B-spline curve "SPLINE": the smooth centreline through every station.
+- 126 B-spline curve "SPLINE": the smooth centreline through every station;
+- with end fittings (model/fittings.py), one more 106 form 12 polyline per fitting, "FITSTART"
+  and "FITEND": its centreline from the port to the outlet (the bend sampled).
 
 In CATIA: Rib (or Sweep) with PROFILE as the profile and POLYLINE or SPLINE as the centre
 curve, option 'keep angle', gives the hose as a solid.
@@ -53,14 +55,10 @@ def iges_bytes(result: Result, file_name: str = "hose.igs") -> bytes:
         entity = points.TransferPoint(Geom_CartesianPoint(gp_Pnt(*map(float, centre))))
         _add(writer, entity, f"CM{number}")
 
-    path = np.vstack([stations[:1], centres, stations[-1:]])
-    coordinates = HArray1_double(1, path.size)
-    for index, value in enumerate(path.ravel(), start=1):
-        coordinates.SetValue(index, float(value))
-    polyline = IGESGeom_CopiousData()
-    polyline.Init(XYZ_TRIPLES, 0.0, coordinates)
-    polyline.SetPolyline(True)  # form 12: the points joined by straight lines
-    _add(writer, polyline, "POLYLINE")
+    _add(writer, _polyline(np.vstack([stations[:1], centres, stations[-1:]])), "POLYLINE")
+    fittings = result.problem.fittings
+    for name, port, fitting in fittings.pieces() if fittings else ():
+        _add(writer, _polyline(fitting.centreline(port)), "FITSTART" if name == "start" else "FITEND")
 
     curves = GeomToIGES_GeomCurve()
     curves.SetModel(writer.Model())
@@ -73,6 +71,17 @@ def iges_bytes(result: Result, file_name: str = "hose.igs") -> bytes:
     if not writer.Write(stream):
         raise RuntimeError("OpenCASCADE could not write the IGES model")
     return stream.getvalue()
+
+
+def _polyline(path: np.ndarray) -> IGESGeom_CopiousData:
+    """A 106 form 12 polyline through the (K, 3) points `path` (mm)."""
+    coordinates = HArray1_double(1, path.size)
+    for index, value in enumerate(path.ravel(), start=1):
+        coordinates.SetValue(index, float(value))
+    polyline = IGESGeom_CopiousData()
+    polyline.Init(XYZ_TRIPLES, 0.0, coordinates)
+    polyline.SetPolyline(True)  # form 12: the points joined by straight lines
+    return polyline
 
 
 def _add(writer: IGESControl_Writer, entity, label: str) -> None:

@@ -52,7 +52,12 @@ def read_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _checked(path: Path, vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The mesh, if its vertices are finite and within the coordinate range and its triangles index them."""
+    """The mesh, if its vertices are 3D points, finite and within the coordinate range and its triangles index them."""
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+        raise ObstacleFileError(
+            f"{path}: the reader found vertices of shape {vertices.shape} and faces of shape {faces.shape}, not 3D "
+            "points and triangles (a damaged line, e.g. a vertex with two numbers): export the mesh again"
+        )
     if not np.all(np.isfinite(vertices)):
         raise ObstacleFileError(f"{path}: has vertices that are not finite numbers")
     largest = float(np.max(np.abs(vertices), initial=0.0))

@@ -45,8 +45,9 @@ bending_stiffness_2 (N*mm^2, optional) is EI about the second section axis.
 Clips (intermediate supports, model/clips.py), one [[clips]] table each, in order of arc length::
 
     [[clips]]
-    type = "fixed"                   # fixed, rotating or ball
+    type = "fixed"                   # fixed, rotating, sliding or ball
     arc_length = 150.0               # mm from the start fitting, on a station of the hose
+                                     # (sliding: where the placement starts it; the solve finds it)
     point = [-60.0, 120.0, 10.0]     # mm
     direction = [-1.0, 0.3, 0.0]     # the hose's tangent through the clip (not for a ball clip)
     name = "bracket"                 # optional
@@ -54,6 +55,33 @@ Clips (intermediate supports, model/clips.py), one [[clips]] table each, in orde
 With [mounts], a clip may name IGES points instead of point and direction, as the fittings do:
 tip = "E" with behind = "F" (the hose passes along F->E) or ahead = "F" (along E->F); a ball
 clip names its tip only.
+
+The thesis' off-axis stiffener springs (model/stiffeners.py), optional, either the chapter IV
+preset (angle, table and segment count from hose.length; hose.segments left out or equal to
+the preset's) or the springs given::
+
+    [hose.stiffeners]
+    springs = 16                     # 8 or 16 between adjacent segments, default 16
+    preset = "thesis"                # or, instead of preset:
+    angle_deg = 71.0                 # degrees from the section plane, (0, 90]
+    table = [[0.0, 0.0], [0.2, 0.0], [0.21, 2500.0]]  # [deformation mm, force N], tension positive
+
+End fittings (model/fittings.py): [fittings.start] and [fittings.end] make [start] and [end] the ports
+(seal face centres) and put a rigid fitting between each port and the flexible hose; [hose] then takes
+either length (the free, cut length) or overall_length (the catalogue's, fittings included)::
+
+    [hose]
+    overall_length = 400.0           # mm, instead of length
+    [fittings.start]
+    length = 30.0                    # mm, straight fitting from the port
+    [fittings.end]
+    bend_angle = 90.0                # degrees, an elbow
+    length = 25.0                    # mm, port to the vertex (the drop)
+    outlet_length = 30.0             # mm, vertex to the hose
+    bend_radius = 12.0               # mm, optional (0: sharp corner)
+    reference = [0.0, 0.0, 1.0]      # the elbow bends towards this at clocking 0
+    clocking = 30.0                  # degrees about the port direction, optional
+    outer_diameter = 14.0            # mm, optional (default: the hose's)
 """
 
 from __future__ import annotations
@@ -80,8 +108,11 @@ from hoseline.model.hose import (
 )
 from hoseline.model import limits
 from hoseline.model.clips import Clip
+from hoseline.model.fittings import EndFittings, Fitting
 from hoseline.model.mounts import Mount
 from hoseline.model.problem import Problem, reaches
+from hoseline.model.preset import Preset
+from hoseline.model.stiffeners import PRESETS, SPRING_COUNTS, SpringTable, Stiffeners, thesis_preset
 
 
 class ProblemFileError(ValueError):
@@ -95,6 +126,8 @@ _UNITS = {
     "bending_stiffness": "EI, N*mm^2",
     "bending_stiffness_2": "EI about the second axis, N*mm^2",
     "torsional_stiffness": "GJ, N*mm^2",
+    "torsion_factor": "GJ over the isotropic EI / (1 + poisson_ratio)",
+    "poisson_ratio": "nu in the torsion factor's isotropic GJ",
     "mass_per_length": "kg/m",
     "min_bend_radius": "mm, to the inside of the bend",
     "segments": "rigid segments of the model",
@@ -110,6 +143,20 @@ _UNITS = {
     "arc_length": "mm from the start fitting",
     "name": "free text",
     "clips.direction": "the hose's tangent through the clip",
+    "springs": "8 or 16 springs between adjacent segments",
+    "angle_deg": "degrees, spring to the section plane",
+    "table": "[deformation mm, force N] pairs, tension positive",
+    "preset": "\"thesis\": chapter IV angle, table and segments",
+    "preset_radius": "mm, radius of the set from storage (natural curvature)",
+    "preset_angle_deg": "degrees, side of the set about the hose axis from the start fitting's d1",
+    "overall_length": "mm, fittings included (catalogue length)",
+    "bend_angle": "degrees, 0 for a straight fitting",
+    "outlet_length": "mm, elbow vertex to the hose",
+    "bend_radius": "mm, centreline radius of the elbow",
+    "clocking": "degrees about the port direction from reference",
+    "reference": "direction the elbow bends towards at clocking 0",
+    "fittings.length": "mm, straight: port to hose; elbow: port to vertex",
+    "fittings.outer_diameter": "mm, of the fitting",
 }
 
 
@@ -216,6 +263,61 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)
 
 
+SPRING_FORCE_N = 1e7  # largest force of a stiffener table, N
+
+
+def _spring_count(value: int) -> int:
+    if value not in SPRING_COUNTS:
+        raise ValueError("must be 8 or 16 (the thesis' geometries: equations 9-12 and 13-16)")
+    return value
+
+
+def _spring_angle(value: float) -> float:
+    if not (math.isfinite(value) and 0.0 < value <= 90.0):
+        raise ValueError("must lie in (0, 90] degrees from the section plane (90: along the hose)")
+    return value
+
+
+def _spring_table(value: list[list[float]]) -> list[list[float]]:
+    if len(value) < 2:
+        raise ValueError("give at least two [deformation mm, force N] pairs")
+    for index, pair in enumerate(value):
+        if len(pair) != 2 or not all(math.isfinite(v) for v in pair):
+            raise ValueError(f"pair {index} must be two finite numbers [deformation mm, force N]")
+        if abs(pair[0]) > limits.LENGTH_MM[1] or abs(pair[1]) > SPRING_FORCE_N:
+            raise ValueError(f"pair {index}: deformations lie within +-{limits.LENGTH_MM[1]:g} mm and forces within "
+                             f"+-{SPRING_FORCE_N:g} N (a 100 mm steel rope breaks at about that); check the units")
+        if index and pair[0] <= value[index - 1][0]:
+            raise ValueError(f"pair {index}: deformation {pair[0]!r} mm must be above the one before it (strictly increasing)")
+    return value
+
+
+def _spring_preset(value: str) -> str:
+    if value not in PRESETS:
+        raise ValueError(f"unknown preset: use {', '.join(repr(name) for name in PRESETS)} (Thomas 2004, chapter IV)")
+    return value
+
+
+class StiffenersSection(_Section):
+    """[hose.stiffeners]: the thesis' off-axis springs (model/stiffeners.py): preset, or angle and table (mm, N, degrees)."""
+
+    springs: Annotated[int, AfterValidator(_spring_count)] = 16
+    preset: Annotated[str, AfterValidator(_spring_preset)] | None = None
+    angle_deg: Annotated[float, AfterValidator(_spring_angle)] | None = None
+    table: Annotated[list[list[float]], AfterValidator(_spring_table)] | None = None
+
+    @model_validator(mode="after")
+    def _preset_or_angle_and_table(self) -> "StiffenersSection":
+        explicit = [key for key in ("angle_deg", "table") if getattr(self, key) is not None]
+        if self.preset is not None and explicit:
+            raise ValueError(f"hose.stiffeners: preset and {' and '.join(explicit)} are given: keep preset = "
+                             '"thesis" (its angle and table follow from the hose length) or give angle_deg and table')
+        if self.preset is None and len(explicit) < 2:
+            raise ValueError('hose.stiffeners: give preset = "thesis", or both angle_deg (degrees) and table '
+                             "([deformation mm, force N] pairs)")
+        return self
+
+
 class HoseSection(_Section):
     """[hose]: geometry, stiffness, weight and limits (mm, N*mm^2, N/mm^2, kg/m)."""
 
@@ -231,6 +333,9 @@ class HoseSection(_Section):
     mass_per_length: Annotated[float, _not_negative("kg/m", limits.MASS_PER_LENGTH_KG_M)] = 0.0
     min_bend_radius: Annotated[float, _not_negative("mm", limits.LENGTH_MM[1])] | None = None
     segments: Annotated[int, AfterValidator(_segments)] = DEFAULT_SEGMENTS
+    stiffeners: StiffenersSection | None = None
+    preset_radius: Annotated[float, _in_range(limits.LENGTH_MM, "mm", "1 mm to 100 m")] | None = None
+    preset_angle_deg: Annotated[float, AfterValidator(_angle)] | None = None
 
     @model_validator(mode="after")
     def _one_way_to_give_each_stiffness(self) -> "HoseSection":
@@ -360,6 +465,29 @@ class ClipSection(_Section):
     point: Point
     direction: Direction | None = None
     name: str = ""
+
+
+class EndFittingSection(_Section):
+    """[fittings.start] or [fittings.end]: one rigid end fitting (model/fittings.py checks the geometry)."""
+
+    length: Annotated[float, _not_negative("mm", limits.LENGTH_MM[1])]
+    bend_angle: float = 0.0
+    outlet_length: Annotated[float, _not_negative("mm", limits.LENGTH_MM[1])] = 0.0
+    bend_radius: Annotated[float, _not_negative("mm", limits.LENGTH_MM[1])] = 0.0
+    clocking: Angle = 0.0
+    reference: Direction | None = None
+    outer_diameter: Annotated[float, _in_range(limits.OUTER_DIAMETER_MM, "mm", "capillary tube to dredging hose")] | None = None
+
+
+class FittingsSection(_Section):
+    """[fittings]: the fitting at each end (either may be left out)."""
+
+    start: EndFittingSection | None = None
+    end: EndFittingSection | None = None
+
+
+class _OverallLength(_Section):
+    overall_length: Annotated[float, _in_range(limits.LENGTH_MM, "mm", "1 mm to 100 m")]
 
 
 class ProblemFile(_Section):
@@ -493,9 +621,11 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
     elif isinstance(data.get("clips"), list) and any(isinstance(c, dict) and "tip" in c for c in data["clips"]):
         raise ProblemFileError(f"{source}: clips: a clip named by tip needs the IGES file of [mounts]; "
                                "give point and direction instead, or add [mounts]")
+    data, fittings = _with_fittings_resolved(data, source)
     spec = _validated(ProblemFile, data, source)
     bending, torsional = spec.hose.stiffnesses()
     try:
+        stiffeners, segments = _stiffeners(spec.hose)
         hose = Hose(
             length=spec.hose.length,
             outer_diameter=spec.hose.outer_diameter,
@@ -503,9 +633,16 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             torsional_stiffness=torsional,
             mass_per_length=spec.hose.mass_per_length,
             min_bend_radius=spec.hose.min_bend_radius,
-            segments=spec.hose.segments,
+            segments=segments,
             bending_stiffness_2=spec.hose.bending_stiffness_2,
+            stiffeners=stiffeners,
+            preset=_preset(spec.hose),
         )
+        if hose.preset is not None and spec.clips:
+            raise ValueError("hose.preset_radius with [[clips]]: a preset hose with clips is not implemented yet; "
+                             "remove preset_radius or the clips")
+        if stiffeners is not None:  # the 8-spring chord must fit the hose: refused here, not in the solver
+            stiffeners.anchors(hose.outer_radius, hose.segment_length, hose.segment_length)
         return Problem(
             hose=hose,
             start=Mount(point=spec.start.point, direction=spec.start.direction),
@@ -514,9 +651,38 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             gravity=spec.environment.gravity,
             name=spec.name,
             clips=tuple(_clip(index, clip) for index, clip in enumerate(spec.clips)),
+            fittings=fittings,
         )
     except ValueError as exc:  # the model's own checks; its messages name the field
         raise ProblemFileError(f"{source}: {exc}") from None
+
+
+def _preset(section: HoseSection) -> Preset | None:
+    """The hose's set from storage (model/preset.py), None without preset_radius."""
+    if section.preset_radius is None:
+        if section.preset_angle_deg is not None:
+            raise ValueError(f"hose.preset_angle_deg = {section.preset_angle_deg!r} without preset_radius: "
+                             "give preset_radius (mm, radius of the set) or remove preset_angle_deg")
+        return None
+    return Preset(1.0 / section.preset_radius, section.preset_angle_deg or 0.0)
+
+
+def _stiffeners(section: HoseSection) -> tuple[Stiffeners | None, int]:
+    """The Stiffeners of [hose.stiffeners] (None without it) and the segment count (the preset's with preset)."""
+    spec = section.stiffeners
+    if spec is None:
+        return None, section.segments
+    if spec.preset is None:
+        table = SpringTable(tuple(pair[0] for pair in spec.table), tuple(pair[1] for pair in spec.table))
+        return Stiffeners(spec.springs, spec.angle_deg, table), section.segments
+    preset = thesis_preset(section.length, spec.springs)
+    if "segments" in section.model_fields_set and section.segments != preset.segments:
+        raise ValueError(
+            f"hose.segments = {section.segments}: the thesis stiffener preset divides {section.length:g} mm into "
+            f"{preset.segments} elements of {preset.element_length:.4f} mm; remove hose.segments or set it to "
+            f"{preset.segments}"
+        )
+    return preset.stiffeners, preset.segments
 
 
 def _clip(index: int, section: ClipSection) -> Clip:
@@ -525,6 +691,60 @@ def _clip(index: int, section: ClipSection) -> Clip:
         return Clip(section.type, section.point, section.arc_length, section.direction, section.name)
     except ValueError as exc:
         raise ValueError(f"clips[{index}]: {exc}") from None
+
+
+def _with_fittings_resolved(data: dict, source: str) -> tuple[dict, EndFittings | None]:
+    """`data` with [fittings] taken out, [start] and [end] moved to the fitting outlets and hose.overall_length
+    turned into the free hose.length; and the EndFittings (None without [fittings])."""
+    hose = data.get("hose")
+    overall = hose.get("overall_length") if isinstance(hose, dict) else None
+    if "fittings" not in data and overall is None:
+        return data, None
+    resolved = dict(data)
+    spec = _validated(FittingsSection, resolved.pop("fittings", {}), source, ("fittings",))
+    if isinstance(hose, dict) and "overall_length" in hose:
+        if "length" in hose:
+            raise ProblemFileError(f"{source}: hose: both length and overall_length are given: keep one (length = the "
+                                   "free hose between the fittings, overall_length = the catalogue's, fittings included)")
+        overall = _validated(_OverallLength, {"overall_length": hose["overall_length"]}, source, ("hose",)).overall_length
+    ports = [_validated(section, data.get(name), source, (name,)) if name in data else None
+             for name, section in (("start", MountSection), ("end", EndSection))]
+    if None in ports:  # a missing [start] or [end]: the whole file's check names it
+        _validated(ProblemFile, resolved, source)
+    built = {}
+    for name in ("start", "end"):
+        section = getattr(spec, name)
+        try:
+            built[name] = None if section is None else Fitting(
+                section.length, section.bend_angle, section.outlet_length, section.bend_radius, section.clocking,
+                section.reference, section.outer_diameter)
+        except ValueError as exc:
+            raise ProblemFileError(f"{source}: fittings.{name}: {exc}") from None
+    try:
+        fittings = EndFittings(Mount(ports[0].point, ports[0].direction), Mount(ports[1].point, ports[1].direction),
+                               built["start"], built["end"])
+        outlets = fittings.outlets()
+    except ValueError as exc:
+        raise ProblemFileError(f"{source}: fittings: {exc}") from None
+    if overall is not None:
+        free = fittings.free_length(overall)
+        if not free > 0.0:
+            raise ProblemFileError(
+                f"{source}: hose.overall_length = {_show(overall)} mm is not longer than the {fittings.length_allowance:g} "
+                f"mm the fittings take up: give an overall_length above {fittings.length_allowance:g} mm, or shorter fittings")
+        resolved["hose"] = {key: value for key, value in hose.items() if key != "overall_length"} | {"length": free}
+    free = resolved["hose"].get("length") if isinstance(resolved.get("hose"), dict) else None
+    gap = math.dist(outlets[0].point, outlets[1].point)
+    if isinstance(free, (int, float)) and not reaches(free, gap):
+        allowance = fittings.length_allowance
+        given = (f"hose.overall_length = {_show(overall)} mm leaves a free length of {free:g} mm"
+                 if overall is not None else f"hose.length = {_show(free)} mm (the free length)")
+        raise ProblemFileError(
+            f"{source}: {given}, not longer than the {gap:g} mm between the fitting outlets: give an overall_length "
+            f"above {gap + allowance:g} mm (a length above {gap:g} mm), or shorter fittings")
+    resolved["start"] = {"point": _floats(outlets[0].point), "direction": _floats(outlets[0].direction)}
+    resolved["end"] = {**data["end"], "point": _floats(outlets[1].point), "direction": _floats(outlets[1].direction)}
+    return resolved, fittings if fittings.pieces() else None
 
 
 def _validated(
@@ -641,17 +861,23 @@ def read_toml(path: Path, error: type[ValueError]) -> dict:
     return data
 
 
-def problem_to_dict(problem: Problem) -> dict:
+def problem_to_dict(problem: Problem, poisson_ratio: float | None = None) -> dict:
     """The problem in the file format, with EI and GJ explicit (for result.json and problem.toml).
 
-    problem_from_dict(problem_to_dict(p)) rebuilds p.
+    problem_from_dict(problem_to_dict(p)) rebuilds p.  poisson_ratio: given, the torsion is
+    written as torsion_factor = GJ / (EI / (1 + poisson_ratio)) with that poisson_ratio instead
+    of GJ (as `calibrate` reports the factor).
     """
     hose = problem.hose
+    torsion = {"torsional_stiffness": float(hose.torsional_stiffness)} if poisson_ratio is None else {
+        "torsion_factor": float(hose.torsional_stiffness / isotropic_torsional_stiffness(hose.bending_stiffness,
+                                                                                         poisson_ratio)),
+        "poisson_ratio": float(poisson_ratio)}
     hose_dict: dict[str, Any] = {
         "length": float(hose.length),
         "outer_diameter": float(hose.outer_diameter),
         "bending_stiffness": float(hose.bending_stiffness),
-        "torsional_stiffness": float(hose.torsional_stiffness),
+        **torsion,
         "mass_per_length": float(hose.mass_per_length),
         "segments": int(hose.segments),
     }
@@ -659,17 +885,46 @@ def problem_to_dict(problem: Problem) -> dict:
         hose_dict["bending_stiffness_2"] = float(hose.bending_stiffness_2)
     if hose.min_bend_radius is not None:
         hose_dict["min_bend_radius"] = float(hose.min_bend_radius)
+    if hose.preset is not None and hose.preset.curvature > 0.0:
+        hose_dict["preset_radius"] = float(hose.preset.radius)
+        hose_dict["preset_angle_deg"] = float(hose.preset.angle_deg)
+    if hose.stiffeners is not None:  # written out explicitly (a preset's angle and table included)
+        stiffeners = hose.stiffeners
+        hose_dict["stiffeners"] = {
+            "springs": int(stiffeners.springs),
+            "angle_deg": float(stiffeners.angle_deg),
+            "table": [[float(x), float(f)] for x, f in zip(stiffeners.table.deformation, stiffeners.table.force)],
+        }
+    # with fittings, [start] and [end] are the ports and hose.length the free length
+    start, end = (problem.fittings.start_port, problem.fittings.end_port) if problem.fittings else (problem.start, problem.end)
     return {
         "name": problem.name,
         "hose": hose_dict,
-        "start": {"point": _floats(problem.start.point), "direction": _floats(problem.start.direction)},
+        "start": {"point": _floats(start.point), "direction": _floats(start.direction)},
         "end": {
-            "point": _floats(problem.end.point),
-            "direction": _floats(problem.end.direction),
+            "point": _floats(end.point),
+            "direction": _floats(end.direction),
             "twist": float(problem.end_twist_deg),
         },
         "environment": {"gravity": _floats(problem.gravity)},
-    } | ({"clips": [_clip_dict(clip) for clip in problem.clips]} if problem.clips else {})
+    } | ({"clips": [_clip_dict(clip) for clip in problem.clips]} if problem.clips else {}) | _fittings_dict(problem)
+
+
+def _fittings_dict(problem: Problem) -> dict[str, Any]:
+    """{"fittings": {"start": ..., "end": ...}} in the file format, or {} without fittings."""
+    if problem.fittings is None:
+        return {}
+    tables = {}
+    for name, _, fitting in problem.fittings.pieces():
+        table: dict[str, Any] = {"length": float(fitting.length)}
+        if fitting.bend_angle_deg:
+            table |= {"bend_angle": float(fitting.bend_angle_deg), "outlet_length": float(fitting.outlet_length),
+                      "bend_radius": float(fitting.bend_radius), "clocking": float(fitting.clocking_deg),
+                      "reference": _floats(fitting.reference)}
+        if fitting.outer_diameter is not None:
+            table["outer_diameter"] = float(fitting.outer_diameter)
+        tables[name] = table
+    return {"fittings": tables}
 
 
 def _clip_dict(clip: Clip) -> dict[str, Any]:
@@ -683,17 +938,29 @@ def _floats(vector: np.ndarray) -> list[float]:
     return [float(v) for v in vector]
 
 
-def problem_to_toml(problem: Problem) -> str:
-    """The problem as a commented TOML problem file that load_problem reads back."""
+def problem_to_toml(problem: Problem, poisson_ratio: float | None = None) -> str:
+    """The problem as a commented TOML problem file that load_problem reads back.
+
+    poisson_ratio: given, the torsion is written as torsion_factor with it (problem_to_dict)."""
     lines = []
-    for key, value in problem_to_dict(problem).items():
+    for key, value in problem_to_dict(problem, poisson_ratio).items():
         tables = [value] if isinstance(value, dict) else value if isinstance(value, list) and key == "clips" else None
+        headers = [f"[{key}]" if isinstance(value, dict) else f"[[{key}]]"] * len(tables or [])
+        if key == "fittings":  # a table of tables: [fittings.start], [fittings.end]
+            headers, tables = [f"[{key}.{end}]" for end in value], list(value.values())
         if tables is not None:
-            for table in tables:
-                lines.append(f"\n[{key}]" if isinstance(value, dict) else f"\n[[{key}]]")
+            for header, table in zip(headers, tables):
+                lines.append(f"\n{header}")
+                nested = {name: item for name, item in table.items() if isinstance(item, dict)}
                 for name, item in table.items():
-                    text = f"{name} = {_toml_value(item)}"
-                    lines.append(f"{text:<45} # {_UNITS.get(f'{key}.{name}', _UNITS.get(name))}")
+                    if name not in nested:
+                        text = f"{name} = {_toml_value(item)}"
+                        lines.append(f"{text:<45} # {_UNITS.get(f'{key}.{name}', _UNITS.get(name))}")
+                for name, inner in nested.items():  # a table inside this one: [hose.stiffeners]
+                    lines.append(f"\n[{key}.{name}]")
+                    for inner_name, item in inner.items():
+                        text = f"{inner_name} = {_toml_value(item)}"
+                        lines.append(f"{text:<45} # {_UNITS.get(inner_name)}")
         else:
             lines.append(f"{key} = {_toml_value(value)}")
     return "\n".join(lines) + "\n"

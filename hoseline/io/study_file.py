@@ -2,7 +2,7 @@
 
     name = "brake hose as built"       # optional, default the file name
     base = "problem.toml"              # a problem file, or a sweep file ([[bodies]]), relative to this file
-    sensitivities = true               # optional: derivatives and first-order variance (placements)
+    sensitivities = true               # optional: derivatives and first-order variance
 
     [sampling]
     method = "sobol"                   # "monte-carlo", "latin-hypercube" or "sobol"
@@ -49,6 +49,7 @@
     clocking_step = 15.0               # degrees
     samples = 0                        # tolerance samples judged per candidate (0: the nominal hose)
     rank_by = "clearance:strut"        # optional: the limited quantity whose margin ranks the candidates
+    method = "grid"                    # or "optimise": per length, the best clocking between grid points
 
 Errors name the field, the value and the fix, as for problem files.
 """
@@ -128,6 +129,7 @@ class DesignSection(_Section):
     clocking_step: Positive = 15.0
     samples: Annotated[int, Field(ge=0)] = 0
     rank_by: str | None = None
+    method: Literal["grid", "optimise"] = "grid"
 
 
 class StudyFile(_Section):
@@ -282,7 +284,7 @@ def _design(section: DesignSection, base: StudyBase, limits: tuple[Limit, ...], 
     if rank_by not in names:
         raise StudyFileError(f"{source}: design.rank_by = \"{rank_by}\": not a limited quantity; choose one of "
                              f"{', '.join(names)}")
-    return DesignGrid(lengths, clockings, rank_by, section.samples)
+    return DesignGrid(lengths, clockings, rank_by, section.samples, section.method)
 
 
 def _steps(pair: list[float], step: float) -> tuple[float, ...]:

@@ -153,7 +153,8 @@ def sensitivities_csv(outcome: StudyOutcome) -> str:
 
 
 def design_csv(outcome: StudyOutcome) -> str:
-    """The ranked candidates that meet every limit, with the margin of each limit."""
+    """The ranked candidates that meet every limit, with the margin of each limit (with the optimiser: one per
+    length, and whether its clocking comes from the optimiser or the grid)."""
     rows = outcome.design.table()
     if not rows:
         return "rank,length_mm,clocking_deg\n"
@@ -224,7 +225,12 @@ def study_document(outcome: StudyOutcome) -> dict:
         design = outcome.design
         document["design"] = {"lengths_mm": list(design.grid.lengths), "clockings_deg": list(design.grid.clockings),
                               "rank_by": design.grid.rank_by, "samples_per_candidate": design.grid.samples,
-                              "ranking": design.table(), "failure_reasons": design.reasons}
+                              "method": design.grid.method, "ranking": design.table(),
+                              "failure_reasons": design.reasons}
+        if design.refined is not None:
+            document["design"]["optimiser"] = [
+                {"length_mm": r.length, "clocking_deg": r.clocking, "bracket_deg": list(r.bracket),
+                 "evaluations": r.evaluations, "improved_on_grid": r.optimised} for r in design.refined]
     return _plain(document)
 
 

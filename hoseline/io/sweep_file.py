@@ -26,6 +26,9 @@ The hose, the mounts at design position and the environment are those of a probl
     [sweep]
     compare_free_roll = true    # optional: also sweep with the end fitting free to spin
 
+    [[clips]]                   # as in a problem file, plus:
+    body = "knuckle"            # optional: the clip moves with this body (default: fixed)
+
 rotate: [from, to] degrees about `axis` through `point` (mm); translate: [from, to] mm
 along `axis`; steps: intervals of the stage (default 20).  Axes and points are in world
 coordinates at design position.  A stage's name is a joint coordinate, starting at 0;
@@ -182,6 +185,15 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
             else:  # only the body: the mount itself comes from elsewhere (e.g. [mounts] iges)
                 del problem_part[role]
             sweep_part[role] = {"body": table["body"]}
+    clip_bodies: tuple = ()
+    if isinstance(problem_part.get("clips"), list):  # [[clips]] body = ...: the sweep's part of a clip
+        tables = problem_part["clips"]
+        clip_bodies = tuple(table.get("body") if isinstance(table, dict) else None for table in tables)
+        problem_part["clips"] = [{key: value for key, value in table.items() if key != "body"}
+                                 if isinstance(table, dict) else table for table in tables]
+        for index, body in enumerate(clip_bodies):
+            if body is not None and not isinstance(body, str):
+                raise SweepFileError(f"{source}: clips[{index}].body = {body!r}: must be the name of a [[bodies]] table")
     if "bodies" not in sweep_part:
         raise SweepFileError(
             f"{source}: missing [[bodies]]: a sweep needs at least one moving body, with poses = \"table.csv\" "
@@ -193,9 +205,6 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
         raise
     except ProblemFileError as exc:
         raise SweepFileError(str(exc)) from None
-    if problem.clips:
-        raise SweepFileError(f"{source}: [[clips]]: sweeps do not carry clips yet; remove the [[clips]] tables "
-                             "(a placement with clips: hoseline solve)")
     tables = _validated(SweepTables, sweep_part, source, error=SweepFileError)
     motions = tuple(_motion(body, base, source) for body in tables.bodies)
     obstacles = tuple(_obstacle(item, base, source) for item in tables.obstacles)
@@ -207,6 +216,7 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
             motions=motions,
             obstacles=obstacles,
             compare_free_roll=tables.sweep.compare_free_roll,
+            clip_bodies=clip_bodies if any(body is not None for body in clip_bodies) else (),
         )
     except ValueError as exc:
         raise SweepFileError(f"{source}: {exc}") from None

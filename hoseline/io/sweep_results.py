@@ -48,6 +48,12 @@ def poses_csv(result: SweepResult) -> str:
     for name in ("start_force", "start_moment", "end_force", "end_moment"):
         unit = "N" if name.endswith("force") else "Nmm"
         columns[f"{name}_{unit}"] = without_round_off(np.linalg.norm(getattr(result, name), axis=1))
+    for j, clip in enumerate(result.sweep.problem.clips):  # each clip's load on the hose (and where it holds it)
+        label = f"clip_{j + 1}"
+        columns[f"{label}_force_N"] = without_round_off(np.linalg.norm(result.clip_forces[:, j], axis=1))
+        columns[f"{label}_moment_Nmm"] = without_round_off(np.linalg.norm(result.clip_moments[:, j], axis=1))
+        if clip.slides:
+            columns[f"{label}_arc_length_mm"] = without_round_off(result.clip_arc_lengths[:, j])
     if result.separation is not None:
         columns["free_roll_separation_mm"] = without_round_off(result.separation)
     columns["newton_iterations"] = result.iterations
@@ -60,12 +66,14 @@ def poses_csv(result: SweepResult) -> str:
 
 
 def shapes_csv(result: SweepResult) -> str:
-    """Every station of every pose: pose, s, x, y, z (mm, 8 significant digits)."""
-    s = without_round_off(result.s)
+    """Every station of every pose: pose, s, x, y, z (mm, 8 significant digits; s per pose where a
+    sliding clip moves the stations along the hose)."""
+    s = without_round_off(result.s if result.station_arc_lengths is None else result.station_arc_lengths)
     centerlines = without_round_off(result.centerlines)
     rows = ["pose,s,x,y,z"]
     for k, line in enumerate(centerlines):
-        rows.extend(f"{k},{_cell(length)},{_cell(x)},{_cell(y)},{_cell(z)}" for length, (x, y, z) in zip(s, line))
+        s_pose = s if s.ndim == 1 else s[k]
+        rows.extend(f"{k},{_cell(length)},{_cell(x)},{_cell(y)},{_cell(z)}" for length, (x, y, z) in zip(s_pose, line))
     return "\n".join(rows) + "\n"
 
 

@@ -31,6 +31,14 @@ Stiffener springs.  Optionally (`springs`, see mechanics/stiffeners.py) the thes
 springs add their energy, gradient and Hessian blocks to every joint; with springs None
 (the default) Numba compiles that branch away, so the plain rod runs as before.
 
+Preset (natural curvature).  Optionally (`rest`, see model/preset.py) every joint j has a
+stress-free relative rotation R0_j (the Q of the joint in the hose's unloaded shape) and its
+energy is that of the rotation left over, Q' = R0_j^T Q = A' B^T with A' = R0_j^T A:  the
+joint kernel is evaluated on the turned frame A'.  A world rotation of A turns A' alike, so
+the kernel's gradient and Hessian with respect to delta_a are exact for the preset joint too.
+The Darboux vector of Q' is kappa - kappa0 to first order; the energy is zero exactly at the
+stress-free shape.  With rest None (the default) Numba compiles the branch away.
+
 Written by hand (Numba) because no library offers this rod; everything is a plain
 loop over joints so the cost is linear in N.
 """
@@ -144,6 +152,24 @@ def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa,
 
 
 @njit(cache=True)
+def rest_turned_into(rest_rotation, frame, out):
+    """out = rest_rotation^T frame: the frame turned back by a joint's stress-free rotation R0 (see the module doc)."""
+    for k in range(3):
+        for x in range(3):
+            out[k, x] = (rest_rotation[0, k] * frame[0, x] + rest_rotation[1, k] * frame[1, x]
+                         + rest_rotation[2, k] * frame[2, x])
+
+
+@njit(cache=True)
+def _preset_joint_terms(frame_a, frame_b, stiffness, joint_length, rest, joint, turned, grad_a, hess_aa, hess_ab):
+    # joint_terms_into of joint `joint`, relative to its stress-free rotation rest[joint] when rest is given
+    if rest is None:
+        return joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab)
+    rest_turned_into(rest[joint], frame_a, turned)
+    return joint_terms_into(turned, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab)
+
+
+@njit(cache=True)
 def _axial_and_c(frame_a, frame_b):
     # a = axial(Q - Q^T) and c = 1 + tr Q of Q = A B^T (see the module doc), without forming Q
     a_0, a_1, a_2 = _rows(frame_a)
@@ -163,12 +189,24 @@ def joint_energy(frame_a, frame_b, stiffness, joint_length):
 
 
 @njit(cache=True)
-def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None):
+def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None, rest=None):
     """Total elastic energy (N*mm) of the rod; the last joint only when the end is clamped.
 
-    springs: stiffener springs (mechanics/stiffeners.py) or None.
+    springs: stiffener springs (mechanics/stiffeners.py) or None.  rest: (N+1, 3, 3)
+    stress-free joint rotations (model/preset.py) or None for a straight, untwisted hose.
     """
     n = frames.shape[0]
+    if rest is not None:
+        turned = np.empty((3, 3))
+        rest_turned_into(rest[0], start_frame, turned)
+        total = joint_energy(turned, frames[0], stiffness, 0.5 * h)
+        for i in range(n - 1):
+            rest_turned_into(rest[i + 1], frames[i], turned)
+            total += joint_energy(turned, frames[i + 1], stiffness, h)
+        if end_clamped:
+            rest_turned_into(rest[n], frames[n - 1], turned)
+            total += joint_energy(turned, end_frame, stiffness, 0.5 * h)
+        return total
     total = joint_energy(start_frame, frames[0], stiffness, 0.5 * h)
     for i in range(n - 1):
         total += joint_energy(frames[i], frames[i + 1], stiffness, h)
@@ -201,7 +239,8 @@ def _add_lower_block_transposed(band, row0, col0, block):
 
 @njit(cache=True)
 def assemble(
-    frames, start_frame, end_frame, stiffness, h, segment_loads, roll_free, grad, band, end_clamped=True, springs=None
+    frames, start_frame, end_frame, stiffness, h, segment_loads, roll_free, grad, band, end_clamped=True, springs=None,
+    rest=None,
 ):
     """Elastic + segment energy of the rod, its gradient and its banded Hessian.
 
@@ -210,6 +249,7 @@ def assemble(
     roll_free: when True one extra unknown, the roll of the end frame about its tangent, is
     appended after the 3N segment rotations.  end_clamped: False for a free tip (no end joint).
     springs: stiffener springs between the segments (mechanics/stiffeners.py), None for none.
+    rest: (N+1, 3, 3) stress-free rotations of the joints (preset, model/preset.py), None for none.
     grad: (n,) output, band: (n, BANDWIDTH+1) output (lower band, band[i, k] = H[i, i-k]);
     both are overwritten.  Returns (elastic_energy, segment_energy) in N*mm.
     """
@@ -219,14 +259,23 @@ def assemble(
     g = np.empty(3)
     haa = np.empty((3, 3))
     hab = np.empty((3, 3))
-    energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab)
+    if rest is None:  # the plain rod's calls stay as they are (a shared helper costs a third of this loop)
+        energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab)
+    else:
+        turned = np.empty((3, 3))
+        rest_turned_into(rest[0], start_frame, turned)
+        energy = joint_terms_into(turned, frames[0], stiffness, 0.5 * h, g, haa, hab)
     if springs is not None:
         energy += spring_terms_into(start_frame, frames[0], springs, HALF, g, haa, hab)
     for x in range(3):  # element by element: a slice assignment compiles Numba's shape-error messages (0.5 s)
         grad[x] -= g[x]
     _add_diag_block(band, 0, haa)
     for i in range(n_seg - 1):
-        energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab)
+        if rest is None:
+            energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab)
+        else:
+            rest_turned_into(rest[i + 1], frames[i], turned)
+            energy += joint_terms_into(turned, frames[i + 1], stiffness, h, g, haa, hab)
         if springs is not None:
             energy += spring_terms_into(frames[i], frames[i + 1], springs, FULL, g, haa, hab)
         for x in range(3):
@@ -237,7 +286,11 @@ def assemble(
         _add_lower_block_transposed(band, 3 * i + 3, 3 * i, hab)
     last = 3 * (n_seg - 1)
     if end_clamped:
-        energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab)
+        if rest is None:
+            energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab)
+        else:
+            rest_turned_into(rest[n_seg], frames[n_seg - 1], turned)
+            energy += joint_terms_into(turned, end_frame, stiffness, 0.5 * h, g, haa, hab)
         if springs is not None:
             energy += spring_terms_into(frames[n_seg - 1], end_frame, springs, HALF, g, haa, hab)
         for x in range(3):
@@ -269,18 +322,20 @@ def assemble(
 
 
 @njit(cache=True)
-def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None):
+def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None, rest=None):
     """Internal moment (world, N*mm) and discrete Darboux vector (material, 1/mm) at the N+1 nodes.
 
     The moment at node j is dE_joint/d(delta_B): the moment exerted by the part of the
     hose beyond the node on the part before it (springs included when given).  The Darboux
     vector components are (bending about d1, bending about d2, twist rate).  A free tip
-    carries no moment.
+    carries no moment.  rest: stress-free joint rotations (preset) or None; the moment is
+    then that of the joint's deviation from them, the Darboux vector stays the geometric one.
     """
     n_seg = frames.shape[0]
     g = np.empty(3)
     haa = np.empty((3, 3))
     hab = np.empty((3, 3))
+    turned = np.empty((3, 3))
     moments = np.zeros((n_seg + 1, 3))
     darboux = np.zeros((n_seg + 1, 3))
     for j in range(n_seg + 1 if end_clamped else n_seg):
@@ -290,7 +345,7 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
             fa, fb, length, kind = frames[n_seg - 1], end_frame, 0.5 * h, HALF
         else:
             fa, fb, length, kind = frames[j - 1], frames[j], h, FULL
-        joint_terms_into(fa, fb, stiffness, length, g, haa, hab)
+        _preset_joint_terms(fa, fb, stiffness, length, rest, j, turned, g, haa, hab)
         if springs is not None:
             spring_terms_into(fa, fb, springs, kind, g, haa, hab)
         for x in range(3):

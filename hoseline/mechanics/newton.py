@@ -36,12 +36,15 @@ class RodProperties:
 
     springs: the joint model.  None (default): the elastic joints of energy.py alone; else
     the stiffener springs added at every joint, as packed by mechanics.stiffeners.spring_set.
+    rest: the preset.  None (default): the hose is straight and untwisted when unloaded; else
+    (N+1, 3, 3) stress-free relative rotations of the joints (model/preset.py, energy.py).
     """
 
     stiffness: np.ndarray
     segment_length: float
     segments: int
     springs: tuple | None = None
+    rest: np.ndarray | None = None
 
     @property
     def length(self) -> float:
@@ -87,7 +90,8 @@ def end_frame_of(clamps: Clamps, state: RodState) -> np.ndarray:
 
 @njit(cache=True)
 def _system_kernel(
-    frames, start_point, start_frame, end_point, end_frame, stiffness, h, force, line_weight, roll_free, end_clamped, springs
+    frames, start_point, start_frame, end_point, end_frame, stiffness, h, force, line_weight, roll_free, end_clamped,
+    springs, rest,
 ):
     """One pass over the rod: loads, energy, gradient, banded Hessian, constraint and its Jacobian."""
     n_seg = frames.shape[0]
@@ -95,7 +99,8 @@ def _system_kernel(
     grad = np.empty(n)
     band = np.empty((n, BANDWIDTH + 1))
     loads = segment_loads(frames, force, line_weight, h)
-    elastic, _ = assemble(frames, start_frame, end_frame, stiffness, h, loads, roll_free, grad, band, end_clamped, springs)
+    elastic, _ = assemble(frames, start_frame, end_frame, stiffness, h, loads, roll_free, grad, band, end_clamped,
+                          springs, rest)
     jac_t = np.zeros((n, 3))
     tip = start_point.copy()
     weight_potential = 0.0
@@ -125,6 +130,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
     if clamps.clips:
         from hoseline.mechanics import clipped_newton  # it builds on this module
 
+        _refuse_preset_with_clips(props)
         return clipped_newton.evaluate(props, clamps, state)
     roll_free = clamps.roll_free and clamps.end_clamped
     force = state.end_force if clamps.end_clamped else clamps.end_load
@@ -142,6 +148,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
         roll_free,
         clamps.end_clamped,
         props.springs,
+        props.rest,
     )
     force = state.end_force if clamps.end_clamped else clamps.end_load
     residual = _residual(grad_max, gap, force, clamps.line_weight, props.largest_stiffness, props.length)
@@ -201,6 +208,7 @@ def _solve_equilibrium(props, clamps, state, tolerance, max_iterations, minimise
     if clamps.clips:
         from hoseline.mechanics import clipped_newton
 
+        _refuse_preset_with_clips(props)
         return clipped_newton.solve_equilibrium(
             props, clamps, state, tolerance=tolerance, max_iterations=max_iterations, minimise=minimise
         )
@@ -223,10 +231,17 @@ def _solve_equilibrium(props, clamps, state, tolerance, max_iterations, minimise
         tolerance,
         max_iterations,
         props.springs,
+        props.rest,
     )
     message = ("", "non-finite residual", "no acceptable step found", "iteration limit reached")[failure]
     new_state = RodState(frames, force if clamps.end_clamped else state.end_force, roll)
     return new_state, NewtonReport(bool(converged), int(iterations), float(residual), int(unstable), message)
+
+
+def _refuse_preset_with_clips(props: RodProperties) -> None:
+    """The clipped rod (mechanics/clipped.py) has no preset terms: refuse rather than ignore the preset."""
+    if props.rest is not None:
+        raise ValueError("a preset hose with clips is not implemented: remove the preset keys or the clips")
 
 
 @njit(cache=True)
@@ -252,12 +267,12 @@ def _residual(grad_max, gap, force, line_weight, largest_stiffness, length):
 @njit(cache=True)
 def _state_system(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness, springs,
+    roll_free, end_clamped, largest_stiffness, springs, rest,
 ):
     """_system_kernel at a state with the end frame turned by `roll`, plus its relative residual."""
     energy, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
         frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
-        roll_free, end_clamped, springs,
+        roll_free, end_clamped, springs, rest,
     )
     residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, h * frames.shape[0])
     return energy, grad, band, jac_t, constraint, residual
@@ -266,7 +281,7 @@ def _state_system(
 @njit(cache=True)
 def _track_kernel(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs,
+    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs, rest,
 ):
     """Plain Newton iterations with step halving, all in compiled code (see solve_equilibrium).
 
@@ -276,7 +291,7 @@ def _track_kernel(
     n_seg = frames.shape[0]
     _, grad, band, jac_t, constraint, residual = _state_system(
         frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-        roll_free, end_clamped, largest_stiffness, springs,
+        roll_free, end_clamped, largest_stiffness, springs, rest,
     )
     unstable = -1
     for iteration in range(max_iterations + 1):
@@ -295,7 +310,7 @@ def _track_kernel(
             trial_roll = roll + (alpha * step[3 * n_seg] if roll_free else 0.0)
             _, t_grad, t_band, t_jac_t, t_constraint, trial_residual = _state_system(
                 trial_frames, trial_force, trial_roll, start_point, start_frame, end_point, end_frame, stiffness, h,
-                line_weight, roll_free, end_clamped, largest_stiffness, springs,
+                line_weight, roll_free, end_clamped, largest_stiffness, springs, rest,
             )
             if trial_residual < (1.0 - 1e-4 * alpha) * residual or trial_residual <= tolerance:
                 accepted = True
@@ -311,7 +326,7 @@ def _track_kernel(
 @njit(cache=True)
 def _minimise_kernel(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs,
+    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs, rest,
 ):
     """Levenberg-Marquardt / trust-region Newton that only accepts steps lowering the energy.
 
@@ -325,7 +340,7 @@ def _minimise_kernel(
     n_seg = frames.shape[0]
     energy, grad, band, jac_t, constraint, residual = _state_system(
         frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-        roll_free, end_clamped, largest_stiffness, springs,
+        roll_free, end_clamped, largest_stiffness, springs, rest,
     )
     diag_scale = 0.0
     for i in range(band.shape[0]):
@@ -356,7 +371,7 @@ def _minimise_kernel(
             trial_roll = roll + (step[3 * n_seg] if roll_free else 0.0)
             t_energy, t_grad, t_band, t_jac_t, t_constraint, trial_residual = _state_system(
                 trial_frames, trial_force, trial_roll, start_point, start_frame, end_point, end_frame, stiffness, h,
-                line_weight, roll_free, end_clamped, largest_stiffness, springs,
+                line_weight, roll_free, end_clamped, largest_stiffness, springs, rest,
             )
             if plain_newton:
                 # close to a stable minimum: plain Newton, judged by the residual

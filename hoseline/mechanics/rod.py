@@ -44,13 +44,17 @@ class ClipHold:
     node: station index k (1 <= k <= N-1) held, at arc length k h.  point: (3,) mm, where the
     station is held.  frame: (3, 3) clip frame (rows d1, d2, d3; d3 along the hose) or None for
     a ball clip (position only).  roll_free: the frame may spin about its d3 (a rotating clip,
-    or any framed clip while it is carried to its place).
+    or any framed clip while it is carried to its place).  sliding: the hose may slide through
+    the clip (a guide ring, framed and roll free): its arc length is an unknown
+    (RodState.clip_arc_lengths) and the segments of the spans next to the node stretch to put
+    the node there (mechanics/clipped.py, stretch_terms).
     """
 
     node: int
     point: np.ndarray
     frame: np.ndarray | None
     roll_free: bool
+    sliding: bool = False
 
 
 @dataclass
@@ -60,7 +64,8 @@ class RodState:
     With clips (Clamps.clips): clip_forces (c, 3), the force of each clip on the hose (N), and
     clip_rolls (c,), the roll of each clip frame about its axis (rad, accumulated; used while
     the clip's roll is free).  Empty without clips; a solve starts them at zero if they do not
-    match the clamps' clips.
+    match the clamps' clips.  clip_arc_lengths (c,): the arc length of each clip, mm (an unknown
+    of sliding clips); a solve starts them at the clips' stations if they do not match.
     """
 
     frames: np.ndarray
@@ -68,10 +73,11 @@ class RodState:
     roll: float = 0.0
     clip_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     clip_rolls: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    clip_arc_lengths: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def copy(self) -> "RodState":
         return RodState(self.frames.copy(), self.end_force.copy(), self.roll, self.clip_forces.copy(),
-                        self.clip_rolls.copy())
+                        self.clip_rolls.copy(), self.clip_arc_lengths.copy())
 
 
 @njit(cache=True)

@@ -3,10 +3,14 @@
 A clip holds the hose at `arc_length` mm from the start fitting, at `point` (mm):
 - fixed: position, direction and roll held (a clamped bracket);
 - rotating: position and direction held, the hose may roll about the clip axis (a loose sleeve);
+- sliding: position and direction held, the hose may roll about the clip axis and slide along it
+  (a frictionless guide ring): the arc length at the clip is found by the solve, `arc_length` is
+  only where the placement starts it (rounded to the nearest station);
 - ball: position held only (a loop of wire).
-`direction` (fixed and rotating clips) is the hose's tangent through the clip, from the start
-side to the end side.  A clip sits on a station of the discrete hose: its arc length must be a
-whole number of segments (clip_node says which and, if not, what to change).
+`direction` (fixed, rotating and sliding clips) is the hose's tangent through the clip, from the
+start side to the end side.  A fixed, rotating or ball clip sits on a station of the discrete
+hose: its arc length must be a whole number of segments (clip_node says which and, if not, what
+to change).
 """
 
 from __future__ import annotations
@@ -18,16 +22,16 @@ import numpy as np
 
 from hoseline.model.mounts import unit_vector
 
-CLIP_KINDS = ("fixed", "rotating", "ball")
-FRAMED_KINDS = ("fixed", "rotating")  # the kinds that hold the hose's direction
+CLIP_KINDS = ("fixed", "rotating", "sliding", "ball")
+FRAMED_KINDS = ("fixed", "rotating", "sliding")  # the kinds that hold the hose's direction
 ON_STATION = 1e-9  # relative to the segment length: an arc length this close to a station is on it
 
 
 @dataclass(frozen=True)
 class Clip:
     """One clip.  kind: one of CLIP_KINDS.  point: (3,) mm.  arc_length: mm from the start fitting.
-    direction: unit tangent of the hose through the clip (fixed, rotating), None for a ball clip.
-    name: free text for reports."""
+    direction: unit tangent of the hose through the clip (fixed, rotating, sliding), None for a ball
+    clip.  name: free text for reports.  For a sliding clip arc_length is the starting guess."""
 
     kind: str
     point: np.ndarray
@@ -37,8 +41,6 @@ class Clip:
 
     def __post_init__(self) -> None:
         label = f"clip {self.name!r}" if self.name else "clip"
-        if self.kind == "sliding":
-            raise ValueError(f"{label}: type = 'sliding' is not supported yet; use 'rotating' at a chosen arc_length")
         if self.kind not in CLIP_KINDS:
             raise ValueError(f"{label}: type = {self.kind!r}: must be one of {', '.join(CLIP_KINDS)}")
         p = np.asarray(self.point, dtype=float).reshape(-1)
@@ -57,6 +59,11 @@ class Clip:
     @property
     def holds_direction(self) -> bool:
         return self.kind in FRAMED_KINDS
+
+    @property
+    def slides(self) -> bool:
+        """The arc length at the clip is an unknown (a sliding clip)."""
+        return self.kind == "sliding"
 
 
 def clip_node(arc_length: float, length: float, segments: int) -> int | None:

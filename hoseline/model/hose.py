@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hoseline.model.preset import Preset
 from hoseline.model.stiffeners import Stiffeners
 
 DEFAULT_SEGMENTS = 100
@@ -55,6 +56,8 @@ class Hose:
     bending_stiffness_2: EI in N*mm^2 about the second axis (d2); None means equal to bending_stiffness.
     stiffeners: the thesis' off-axis springs between adjacent segments (model/stiffeners.py),
         added to the elastic joints; None (default) for the plain rod.
+    preset: the set from storage, a natural curvature (model/preset.py); None (default) for a
+        hose that is straight when unloaded.
     """
 
     length: float
@@ -66,6 +69,7 @@ class Hose:
     segments: int = DEFAULT_SEGMENTS
     bending_stiffness_2: float | None = None
     stiffeners: Stiffeners | None = None
+    preset: Preset | None = None
 
     def __post_init__(self) -> None:
         for name in ("length", "outer_diameter", "bending_stiffness", "torsional_stiffness"):
@@ -84,6 +88,10 @@ class Hose:
             raise ValueError(f"hose.segments = {self.segments!r}: must be a whole number >= {MIN_SEGMENTS}")
         if self.stiffeners is not None and not isinstance(self.stiffeners, Stiffeners):
             raise ValueError(f"hose.stiffeners = {self.stiffeners!r}: must be a Stiffeners or None")
+        if self.preset is not None and not isinstance(self.preset, Preset):
+            raise ValueError(f"hose.preset = {self.preset!r}: must be a Preset or None")
+        if self.preset is not None and self.stiffeners is not None:
+            raise ValueError("hose.preset with hose.stiffeners: the stiffener springs have no preset; give one of them")
 
     @property
     def outer_radius(self) -> float:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hoseline.model.clips import Clip, clip_node, off_station_message
+from hoseline.model.fittings import EndFittings
 from hoseline.model.hose import Hose
 from hoseline.model.mounts import Mount, mount_distance
 
@@ -29,6 +30,8 @@ class Problem:
     gravity: m/s^2 vector (e.g. [0, 0, -9.81]); zero for a weightless study.
     name: free text for reports.
     clips: intermediate supports (model/clips.py), in order of arc length; each on a station of the hose.
+    fittings: the ports and rigid end fittings (model/fittings.py) when the user gave them; start and end
+        are then the fitting outlets (what the solver clamps) and hose.length is the free length.
     """
 
     hose: Hose
@@ -38,6 +41,7 @@ class Problem:
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     name: str = "hose"
     clips: tuple[Clip, ...] = ()
+    fittings: EndFittings | None = None
 
     def __post_init__(self) -> None:
         g = np.asarray(self.gravity, dtype=float).reshape(-1)
@@ -54,6 +58,18 @@ class Problem:
             )
         object.__setattr__(self, "clips", tuple(self.clips))
         self._check_clips()
+        self._check_fittings()
+
+    def _check_fittings(self) -> None:
+        """With fittings, start and end must be their outlets (a moved port needs its fittings moved too)."""
+        if self.fittings is None:
+            return
+        for name, mount, outlet in zip(("start", "end"), (self.start, self.end), self.fittings.outlets()):
+            off = float(np.linalg.norm(mount.point - outlet.point)) / self.hose.length
+            turned = float(np.linalg.norm(mount.direction - outlet.direction))
+            if off > 1e-9 or turned > 1e-9:
+                raise ValueError(f"{name}: the mount is not the outlet of its fitting (off by {off * self.hose.length:g} mm, "
+                                 f"{turned:g} in direction): build the problem with model.fittings.fitted_problem")
 
     def _check_clips(self) -> None:
         """Each clip strictly inside the hose, on a station, after the previous one, and reachable."""
@@ -66,7 +82,7 @@ class Problem:
                     f"{label}: arc_length = {clip.arc_length:g} mm: must lie between {previous_s:g} mm "
                     f"({previous_label}) and the hose length {hose.length:g} mm; list clips in order of arc length"
                 )
-            if clip_node(clip.arc_length, hose.length, int(hose.segments)) is None:
+            if not clip.slides and clip_node(clip.arc_length, hose.length, int(hose.segments)) is None:
                 raise ValueError(off_station_message(label, clip.arc_length, hose.length, int(hose.segments)))
             self._check_span(label, clip.arc_length - previous_s, previous_label)
             self._check_reach(label, clip.arc_length - previous_s, previous_point, clip.point, previous_label)

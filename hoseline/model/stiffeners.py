@@ -20,6 +20,26 @@ Preset (chapter IV): the hose length is divided into an integer number of elemen
 71 deg above; the deformation breakpoints follow equations 18-28 from the spring length
 and the forces are those of Table 6 (0, 0, 0, 2500, 2501, 2503, 2504, 2600, 4000, 6000,
 8000 N), for hose lengths 277.8-2474 mm.  Units: mm, N, degrees.
+
+What the thesis' OCR does not settle (listed in docs/model.md, "Stiffener springs"; nothing is guessed):
+- equation 26 prints "6.20050 x sp_len" without the square; the square is restored because
+  only then it gives Table 6 (x9 = 2.01 mm at 8.6688 mm, against 2.02; without it 414 mm);
+- equation 17 as printed gives 0.12-0.16 deg more than Table 6 at each of its five rows and
+  80.36 deg at 8.4122 mm where the text says 80.21 deg: its coefficients are rounded (234.48
+  +-0.005 alone moves the angle by 0.34 deg); used as printed;
+- Table 6's 73 deg row: spring length 8.571 mm, but 8.2195 mm / sin 73 deg = 8.5951 mm (the
+  other four rows agree with element / sin(angle) to 6e-4 mm); equations 20-28 fit 8.571;
+- Table 11 (element 8.4122 mm "at 71 deg"): its spring length 8.70895 mm is 8.4122 / sin 75 deg;
+  at 71 deg it would be 8.8969 mm.  The preset uses 71 deg, as the text says;
+- Table 10's last row (every length of 277.8-2474 mm divisible into elements of 8.17-8.4122 mm)
+  is reproduced; its other rows (656, 201, 52, 11 lengths left over for upper limits 8.3-8.41
+  mm) are not (exact division leaves 544, 178, 30, 0): the search (steps of 0.00001 mm,
+  "rounding off value" +-0.0002) is not described fully enough to repeat;
+- the spring tables of Figures 13, 18, 22 and 24 (8 springs, early 16 springs, 52 deg) are not
+  readable: Figure 22 shows 11 deformations and 14 forces, Figure 24 its deformations only,
+  partly garbled; Figure 13 four numbers without their column.  The units of the tables are
+  not stated beyond "Force values (Newton)" in Table 6: see table_read_as and the units
+  study in docs/model.md.
 """
 
 from __future__ import annotations
@@ -30,6 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 SPRING_COUNTS = (8, 16)
+PRESETS = ("thesis",)  # the problem file's hose.stiffeners.preset values: "thesis" is thesis_preset()
 
 # Chapter IV: element sizes, the range of the regression (equation 17) and the preset's hose lengths, mm
 ELEMENT_MIN, ELEMENT_REGRESSION_MAX, ELEMENT_MAX = 8.17, 8.2454, 8.4122
@@ -90,9 +111,9 @@ class Stiffeners:
 
     def __post_init__(self) -> None:
         if self.springs not in SPRING_COUNTS:
-            raise ValueError(f"stiffeners.springs = {self.springs!r}: the thesis geometry has 8 or 16 springs")
+            raise ValueError(f"hose.stiffeners.springs = {self.springs!r}: the thesis geometry has 8 or 16 springs")
         if not (math.isfinite(self.angle_deg) and 0.0 < self.angle_deg <= 90.0):
-            raise ValueError(f"stiffeners.angle_deg = {self.angle_deg!r}: must lie in (0, 90] degrees")
+            raise ValueError(f"hose.stiffeners.angle_deg = {self.angle_deg!r}: must lie in (0, 90] degrees")
 
     def chord(self, element_length: float) -> float:
         """len_h = element / tan(angle): how far round the hose a spring reaches, mm (equations 9 and 14)."""
@@ -119,7 +140,7 @@ class Stiffeners:
         if self.springs == 8:
             if chord > 2.0 * radius:
                 raise ValueError(
-                    f"stiffeners.angle_deg = {self.angle_deg:g}: the chord {chord:.3g} mm exceeds the hose diameter "
+                    f"hose.stiffeners.angle_deg = {self.angle_deg:g}: the chord {chord:.3g} mm exceeds the hose diameter "
                     f"{2 * radius:.3g} mm for elements of {element_length:.4g} mm; use a steeper spring angle"
                 )
             half = math.asin(0.5 * chord / radius)  # ang_top, equation 9
@@ -175,6 +196,37 @@ def thesis_deformations(spring_length: float) -> tuple[float, ...]:
     x10 = 585.2 - 137.022 * spring_length + 8.04956 * spring_length**2
     x11 = -2192.54 + 507.583 * spring_length - 29.3037 * spring_length**2
     return (-8.0, 0.0, *x3_to_x8, x9, x10, x11)
+
+
+FORCE_UNITS_N = {"N": 1.0, "mN": 1e-3}  # a table's force unit in newtons
+DEFORMATION_UNITS_MM = {"mm": 1.0, "cm": 10.0, "m": 1e3}  # a table's deformation unit in millimetres
+FREE_LENGTHS = ("anchors", "element")  # what a spring's free length is taken to be
+
+
+def table_read_as(
+    table: SpringTable, force_unit: str = "N", deformation_unit: str = "mm", free_length: str = "anchors",
+    anchor_distance: float = 0.0, element_length: float = 0.0,
+) -> SpringTable:
+    """The same table read in other units or with another free length, in mm and N (the units study).
+
+    force_unit: "N" or "mN", the unit the table's forces are taken to be in.
+    deformation_unit: "mm", "cm" or "m", the unit of its deformations.
+    free_length: "anchors", the spring is free at the distance of its anchors on the straight
+    hose (element / sin(angle); the thesis' Figure 27 puts its table's zero there), or
+    "element", free at the element length (so on the straight hose every spring is already
+    stretched by anchor_distance - element_length, mm).
+    anchor_distance, element_length: mm, needed for free_length = "element".
+    """
+    for name, value, allowed in (("force_unit", force_unit, FORCE_UNITS_N), ("deformation_unit", deformation_unit,
+                                 DEFORMATION_UNITS_MM), ("free_length", free_length, FREE_LENGTHS)):
+        if value not in allowed:
+            raise ValueError(f"{name} = {value!r}: choose one of {', '.join(allowed)}")
+    if free_length == "element" and not 0.0 < element_length <= anchor_distance:
+        raise ValueError(f"free_length = 'element' needs the anchor distance ({anchor_distance!r} mm) and the element "
+                         f"length ({element_length!r} mm), the element no longer than the anchor distance")
+    prestretch = anchor_distance - element_length if free_length == "element" else 0.0
+    deformation = np.asarray(table.deformation) * DEFORMATION_UNITS_MM[deformation_unit] - prestretch
+    return SpringTable(tuple(deformation), tuple(np.asarray(table.force) * FORCE_UNITS_N[force_unit]))
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,7 @@ class SweepProblem:
     obstacles: the surroundings.
     compare_free_roll: also sweep with the end fitting free to spin about its axis (the
         common modelling error) and report how far that answer is from the right one.
+    clip_bodies: the body each of problem.clips moves with (None: fixed), empty for all fixed.
     """
 
     problem: Problem
@@ -54,6 +55,7 @@ class SweepProblem:
     motions: tuple[BodyMotion, ...]
     obstacles: tuple[Obstacle, ...] = ()
     compare_free_roll: bool = True
+    clip_bodies: tuple[str | None, ...] = ()
 
     def __post_init__(self) -> None:
         if not self.motions:
@@ -65,6 +67,11 @@ class SweepProblem:
         for role, body in (("start.body", self.start_body), ("end.body", self.end_body)):
             if body is not None and body not in names:
                 raise ValueError(f"{role} = {body!r}: no such body; bodies: {', '.join(names)}")
+        if self.clip_bodies and len(self.clip_bodies) != len(self.problem.clips):
+            raise ValueError(f"{len(self.clip_bodies)} clip bodies for {len(self.problem.clips)} clips: give one per clip")
+        for index, body in enumerate(self.clip_bodies):
+            if body is not None and body not in names:
+                raise ValueError(f"clips[{index}].body = {body!r}: no such body; bodies: {', '.join(names)}")
         for obstacle in self.obstacles:
             if obstacle.body is not None and obstacle.body not in names:
                 raise ValueError(f"obstacle '{obstacle.name}': body = {obstacle.body!r}: no such body")
@@ -127,6 +134,10 @@ class SweepProblem:
     def stages(self) -> tuple[Stage, ...]:
         """The stages of the travel axis (from the first moving body)."""
         return self.motions[0].stages
+
+    def clip_body(self, index: int) -> str | None:
+        """The body clip `index` moves with (None: fixed)."""
+        return self.clip_bodies[index] if self.clip_bodies else None
 
     def pose(self, body: str | None, index: int) -> Pose:
         """Pose of `body` at sweep pose `index` (the design position for None)."""

@@ -142,8 +142,15 @@ def design_figure(outcome: StudyOutcome) -> go.Figure:
                                     y=[grid.lengths[i] for i, _ in design.ranking], mode="markers",
                                     marker={"symbol": "circle-open", "color": "black", "size": 9},
                                     name="meets every limit"))
-        best_i, best_j = design.ranking[0]
-        figure.add_trace(go.Scatter(x=[grid.clockings[best_j]], y=[grid.lengths[best_i]], mode="markers",
+    if design.refined:
+        figure.add_trace(go.Scatter(x=[r.clocking for r in design.refined], y=[r.length for r in design.refined],
+                                    mode="markers", marker={"symbol": "x-thin-open", "color": "black", "size": 11,
+                                                            "line": {"width": 2}},
+                                    text=[f"margin {r.margins[design.rank_index]:.4g}" for r in design.refined],
+                                    name="optimiser's clocking per length"))
+    best = design.table()[:1]
+    if best:
+        figure.add_trace(go.Scatter(x=[best[0]["clocking_deg"]], y=[best[0]["length_mm"]], mode="markers",
                                     marker={"symbol": "star", "color": "gold", "size": 16,
                                             "line": {"color": "black", "width": 1}}, name="best"))
     figure.update_layout(xaxis_title="clocking (twist at assembly) [deg]", yaxis_title="hose length [mm]",

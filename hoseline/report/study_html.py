@@ -13,6 +13,7 @@ import plotly.io
 from plotly.offline import get_plotlyjs
 
 from hoseline.procedures.sweep.envelope import Envelope
+from hoseline.procedures.variation.design_search import CLOCKING_TOLERANCE
 from hoseline.procedures.variation.study import StudyOutcome
 from hoseline.report.study_figures import (
     clearance_figure,
@@ -51,9 +52,12 @@ def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_te
                   _figure(distributions_figure(outcome)), _spread_table(outcome)]
         if outcome.first_order is not None:
             parts += ["<h2>First order beside Monte Carlo</h2>",
-                      "<p>Sensitivities from the exact Hessian at the nominal equilibrium (implicit function theorem); "
-                      "the first-order variance is g<sup>T</sup> Cov g. Where it disagrees with the samples beyond their "
-                      "sampling error the response is not linear (a fold or fork nearby, or tolerances too large).</p>",
+                      "<p>Sensitivities from the exact Hessian at the nominal equilibrium (implicit function theorem)"
+                      + ("; for a sweep, at the pose where each quantity has its extreme over the sweep (the shape: "
+                         "at the first pose)" if study.base.sweep is not None else "")
+                      + "; the first-order variance is g<sup>T</sup> Cov g. Where it disagrees with the samples beyond "
+                      "their sampling error the response is not linear (a fold or fork nearby, another pose taking "
+                      "over the extreme, or tolerances too large).</p>",
                       _first_order_table(outcome),
                       "<h3>Which tolerance matters most (first order)</h3>", _figure(tornado_figure(outcome))]
         parts += ["<h3>Spread along the hose</h3>", _figure(spread_figure(outcome))]
@@ -129,8 +133,16 @@ def _design_table(outcome: StudyOutcome) -> str:
     grid = design.grid
     intro = (f"<p>{len(grid.lengths)} lengths x {len(grid.clockings)} clockings"
              + (f", each over {grid.samples} tolerance samples (margins: 5th percentile)" if grid.samples else "")
-             + f"; ranked by the margin of {html.escape(grid.rank_by)}. {len(design.ranking)} candidates meet every "
-             "limit.</p>")
+             + f"; ranked by the margin of {html.escape(grid.rank_by)}. {len(design.ranking)} grid candidates meet "
+             "every limit.</p>")
+    if design.refined is not None:
+        optimised = sum(r.optimised for r in design.refined)
+        intro += (f"<p>Optimiser: for each of the {len(design.refined)} lengths with a grid candidate meeting every "
+                  f"limit, the margin of {html.escape(grid.rank_by)} maximised over the clocking between the grid points "
+                  f"either side of its best candidate (Brent's bounded method, to {CLOCKING_TOLERANCE:g} deg); "
+                  f"{optimised} improved on the grid, the others keep the grid's clocking (column \"clocking from\"). "
+                  f"{sum(r.evaluations for r in design.refined)} candidates solved. The table ranks these; the heat map "
+                  "shows the grid, the optimiser's candidates as crosses.</p>")
     rows = design.table()[:20]
     if not rows:
         return intro + '<p class="bad">No candidate meets every limit.</p>'

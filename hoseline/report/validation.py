@@ -160,6 +160,9 @@ def _document(comparisons, envelope, calibration, twist_paths) -> dict:
             "before": [d.summary() for d in calibration.before],
             "after": [d.summary() for d in calibration.after],
             "notes": calibration.notes,
+            "warnings": calibration.warnings,
+            "scatter_inflation": calibration.scatter_inflation,
+            "poisson_ratio": calibration.poisson_ratio,
             "evaluations": calibration.evaluations,
             "warm_solves": calibration.warm_solves,
             "cold_solves": calibration.cold_solves,
@@ -211,6 +214,7 @@ def _html(comparisons, envelope, calibration, twist_paths, png: bytes, twist_png
                   _table(["scan", "mean before [mm]", "max before [mm]", "mean after [mm]", "max after [mm]"],
                          [[c.label, f"{b.mean:.3f}", f"{b.max:.3f}", f"{a.mean:.3f}", f"{a.max:.3f}"]
                           for c, b, a in zip(comparisons, calibration.before, calibration.after)])]
+        parts += [f"<p><strong>Warning:</strong> {html.escape(warning)}</p>" for warning in calibration.warnings]
         parts += [f"<p>{html.escape(note)}</p>" for note in calibration.notes]
     if twist_paths:
         parts += ["<h2>Models along the twist</h2>",

@@ -77,14 +77,17 @@ class Session:
     def open_problem(self, problem: Problem) -> None:
         """Edit `problem` from now on (the obstacles stay; a sweep's motion is dropped); place it.
 
-        Raises PlacementError when it cannot be placed (the session stays as it was).
+        Raises StudioError for what the studio cannot edit, PlacementError when it cannot be placed
+        (the session stays as it was).
         """
+        _editable(problem)
         self._adopt(problem, solve(problem))
         self.sweep, self.pose_index = None, None
         self.revision += 1
 
     def open_sweep(self, sweep: SweepProblem) -> None:
         """Edit the sweep's problem at design position, show its obstacles, play its motion; place it."""
+        _editable(sweep.problem)
         obstacles = [ShownObstacle(o, TriangleIndex(o.vertices, o.faces)) for o in sweep.obstacles]
         self._adopt(sweep.problem, solve(sweep.problem))
         self.sweep, self.pose_index, self.obstacles = sweep, None, obstacles
@@ -258,6 +261,16 @@ class Session:
             return problem_from_dict(data, source="studio")
         except ProblemFileError as exc:
             raise StudioError(str(exc).removeprefix("studio: ")) from None
+
+
+def _editable(problem: Problem) -> None:
+    """Refuse what the page cannot edit yet: the page drags the flexible hose's ends, so a problem
+    with rigid end fittings (ports and fittings, model/fittings.py) or clips would be moved wrongly."""
+    if problem.fittings is not None:
+        raise StudioError("the studio does not take end fittings yet: remove [fittings.start] and [fittings.end] "
+                          "(give the mounts at the fittings' outlets and the free length), or use hoseline solve")
+    if problem.clips:
+        raise StudioError("the studio does not take clips yet: remove the [[clips]] tables, or use hoseline solve")
 
 
 def _frame(quaternion: list[float]) -> np.ndarray:

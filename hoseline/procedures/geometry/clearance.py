@@ -15,7 +15,7 @@ most of the tree is pruned at once.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
@@ -83,6 +83,36 @@ class TriangleIndex:
         lengths = np.linalg.norm(np.diff(nodes, axis=0), axis=1)
         s = float(np.sum(lengths[:segment]) + np.linalg.norm(on_hose - nodes[segment]))
         return Proximity(distance - outer_radius, s, on_hose, on_obstacle, int(self.order[position]))
+
+
+def nearest_with_fittings(
+    index: TriangleIndex,
+    nodes: np.ndarray,
+    outer_radius: float,
+    fittings: tuple[tuple[np.ndarray, float] | None, tuple[np.ndarray, float] | None] = (None, None),
+) -> Proximity:
+    """Nearest approach of the hose and its end fittings (model/fittings.py) to the obstacle of `index`.
+
+    nodes: (N+1, 3) mm, the flexible hose's centreline; outer_radius: mm.
+    fittings: (start, end), each (its centreline (K, 3) mm from the port to the outlet, its outer radius mm) or None.
+    The arc length s runs along the whole assembly from the start outlet: negative on the start
+    fitting (-c at its port, c its centreline length), beyond the hose length on the end fitting.
+    """
+    best = index.nearest(nodes, outer_radius)
+    for which, piece in zip(("start", "end"), fittings):
+        if piece is None:
+            continue
+        points, radius = piece
+        found = index.nearest(points, radius)
+        if found.distance < best.distance:
+            to_outlet = _polyline_length(points) - found.s
+            best = replace(found, s=-to_outlet if which == "start" else _polyline_length(nodes) + to_outlet)
+    return best
+
+
+def _polyline_length(points: np.ndarray) -> float:
+    """mm along the polyline through `points` (K, 3)."""
+    return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
 
 
 @njit(cache=True)

@@ -227,12 +227,14 @@ def _secant(previous: tuple[float, RodState], current: tuple[float, RodState], t
     (t0, s0), (t1, s1) = previous, current
     ratio = (t_next - t1) / (t1 - t0)
     frames = extrapolate_frames(s0.frames, s1.frames, ratio)
-    clip_forces, clip_rolls = s1.clip_forces, s1.clip_rolls
+    clip_forces, clip_rolls, clip_arcs = s1.clip_forces, s1.clip_rolls, s1.clip_arc_lengths
     if s0.clip_forces.shape == clip_forces.shape and s0.clip_rolls.shape == clip_rolls.shape:
         clip_forces = clip_forces + ratio * (clip_forces - s0.clip_forces)
         clip_rolls = clip_rolls + ratio * (clip_rolls - s0.clip_rolls)
+    if s0.clip_arc_lengths.shape == clip_arcs.shape:  # sliding clips' arc lengths (the others stay put)
+        clip_arcs = clip_arcs + ratio * (clip_arcs - s0.clip_arc_lengths)
     return RodState(frames, s1.end_force + ratio * (s1.end_force - s0.end_force), s1.roll + ratio * (s1.roll - s0.roll),
-                    clip_forces, clip_rolls)
+                    clip_forces, clip_rolls, clip_arcs)
 
 
 def _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, log, control):

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hoseline.mechanics.clipped import joint_darboux, joint_into
-from hoseline.mechanics.clipped_newton import clip_arrays
+from hoseline.mechanics.clipped_newton import clip_arrays, segment_lengths
 from hoseline.mechanics.energy import joint_moments
 from hoseline.mechanics.stiffeners import HALF
 from hoseline.mechanics.newton import RodProperties, end_frame_of
@@ -41,24 +41,32 @@ def station_moments(props: RodProperties, clamps: Clamps, state: RodState):
     tangents at the N+1 stations of an equilibrium `state` under `clamps`."""
     end_frame = end_frame_of(clamps, state)
     moments, darboux = joint_moments(
-        state.frames, clamps.start_frame, end_frame, props.stiffness, props.segment_length, True, props.springs
+        state.frames, clamps.start_frame, end_frame, props.stiffness, props.segment_length, True, props.springs,
+        props.rest,
     )
     tangents = np.vstack([clamps.start_frame[2][None], state.frames[:, 2], end_frame[2][None]])
     node_tangent = tangents[:-1] + tangents[1:]
     node_tangent /= np.linalg.norm(node_tangent, axis=1)[:, None]
     if clamps.clips:  # at a clip that holds the direction: the half joint from the clip frame on
-        _clip_station_moments(props, clamps, state, moments, darboux)
+        lengths, rates = segment_lengths(props, clamps, state)
+        if rates.shape[1]:  # sliding clips stretch their spans: a joint's moment and Darboux vector go as 1/length
+            joint = 0.5 * (np.concatenate([[0.0], lengths]) + np.concatenate([lengths, [0.0]]))
+            uniform = np.full(props.segments + 1, props.segment_length)
+            uniform[[0, -1]] *= 0.5
+            moments *= (uniform / joint)[:, None]
+            darboux *= (uniform / joint)[:, None]
+        _clip_station_moments(props, clamps, state, moments, darboux, lengths)
     return moments, darboux, node_tangent
 
 
-def _clip_station_moments(props: RodProperties, clamps: Clamps, state: RodState, moments, darboux) -> None:
+def _clip_station_moments(props: RodProperties, clamps: Clamps, state: RodState, moments, darboux, lengths) -> None:
     # the hose beyond a clip station hangs on the clip frame through a half joint: its moment on the
     # part before the station and its Darboux vector replace those of the (absent) full joint
     nodes, _, frames, framed, _ = clip_arrays(clamps, state)
     g, haa, hab = np.empty(3), np.empty((3, 3)), np.empty((3, 3))
-    half = 0.5 * props.segment_length
     for node, frame, has_frame in zip(nodes, frames, framed):
         if has_frame:
+            half = 0.5 * lengths[node]
             joint_into(frame, state.frames[node], props.stiffness, half, props.springs, HALF, g, haa, hab)
             moments[node] = -g
             darboux[node] = joint_darboux(frame, state.frames[node], half)
@@ -74,6 +82,8 @@ def hose_health(props: RodProperties, clamps: Clamps, state: RodState, outer_rad
     with np.errstate(divide="ignore"):
         bend_radius = 1.0 / curvature - outer_radius
     start_force = -(state.end_force + props.length * clamps.line_weight)
+    if clamps.clips:  # the clips carry their part
+        start_force -= np.sum(state.clip_forces, axis=0) if state.clip_forces.shape == (len(clamps.clips), 3) else 0.0
     return Health(
         bend_radius=bend_radius,
         twisting_moment=np.einsum("ij,ij->i", moments, node_tangent),

@@ -27,10 +27,8 @@ def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress |
     """
     if not (math.isfinite(accuracy) and accuracy > 0.0):
         raise ValueError(f"accuracy {accuracy!r} mm: give a positive number of mm")
-    if problem.clips:  # the segment counts below would move the clips off the stations
-        raise PlacementError("a hose with clips cannot be refined to an accuracy yet: give hose.segments (the result "
-                             "reports its estimated discretisation error)")
-    segments = int(problem.hose.segments)
+    step = clip_segment_step(problem)
+    segments = _multiple(int(problem.hose.segments), step)
     tried: dict[int, Result] = {}
     for _ in range(ROUNDS):
         result = solve(replace(problem, hose=replace(problem.hose, segments=segments)), progress=progress,
@@ -48,6 +46,33 @@ def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress |
         if needed > MOST_SEGMENTS:
             raise PlacementError(f"an accuracy of {accuracy:g} mm needs about {needed} segments (estimated error "
                                  f"{error:.3g} mm at {segments}), more than {MOST_SEGMENTS}: ask for less accuracy")
-        segments = max(needed, FEWEST_SEGMENTS, MIN_SEGMENTS, segments + 1)
+        segments = _multiple(max(needed, FEWEST_SEGMENTS, MIN_SEGMENTS, segments + 1), step)
     raise PlacementError(f"accuracy {accuracy:g} mm not reached in {ROUNDS} rounds (segment counts tried: "
                          f"{', '.join(map(str, tried))})")
+
+
+def clip_segment_step(problem: Problem) -> int:
+    """The segment counts that keep every fixed, rotating and ball clip on a station of the hose and of
+    the half-as-fine hose of the error estimate are the multiples of this number (1 without such clips).
+
+    A clip at station k of N segments sits at the fraction k / N = p / q (in lowest terms) of the
+    length: it is on a station of every multiple of q, and on an even one of every multiple of 2 q.
+    Sliding clips find their own station."""
+    from fractions import Fraction
+    from math import lcm
+
+    from hoseline.model.clips import clip_node
+
+    segments = int(problem.hose.segments)
+    step = 1
+    for clip in problem.clips:
+        if not clip.slides:
+            fraction = Fraction(clip_node(clip.arc_length, problem.hose.length, segments), segments)
+            step = lcm(step, 2 * fraction.denominator)
+    return step
+
+
+def _multiple(count: int, step: int) -> int:
+    """The least multiple of `step` not below `count`."""
+    return -(-count // step) * step
+

@@ -51,8 +51,10 @@ class OtherEquilibrium:
 class ClipReaction:
     """What one clip does to the hose: kind and name (as in the problem), arc_length (mm from the
     start fitting), point (3,) mm, force (3,) N and moment (3,) N*mm about the clip point, both the
-    clip's on the hose (world axes).  A rotating clip's moment has no component along its axis
-    (the hose rolls freely in it); a ball clip carries a force only."""
+    clip's on the hose (world axes).  A rotating or sliding clip's moment has no component along
+    its axis (the hose rolls freely in it); a ball clip carries a force only.  A sliding clip's
+    arc_length is the one the solve found.  frame: (3, 3) the clip frame as it holds the hose
+    (rows d1, d2, d3; d3 along the hose, the roll found included), None for a ball clip."""
 
     kind: str
     name: str
@@ -60,6 +62,7 @@ class ClipReaction:
     point: np.ndarray
     force: np.ndarray
     moment: np.ndarray
+    frame: np.ndarray | None = None
 
     def summary(self) -> dict:
         """For result.json (user units)."""
@@ -160,8 +163,10 @@ class Result:
         return float(np.max(np.abs(self.twisting_moment)))
 
     def summary(self) -> dict:
-        """Scalars for reports and result.json (user units); "clips" only when the problem has clips."""
+        """Scalars for reports and result.json (user units); "clips" only when the problem has clips, the
+        lengths and "end_fittings" only when it has end fittings."""
         clips = {"clips": [clip.summary() for clip in self.clips]} if self.clips else {}
+        clips |= fittings_summary(self.problem)
         return {
             "name": self.problem.name,
             "length_mm": self.problem.hose.length,
@@ -192,3 +197,19 @@ class Result:
             "wall_time_s": self.wall_time,
             "events": list(self.events),
         } | clips
+
+
+def fittings_summary(problem: Problem) -> dict:
+    """Free and overall length (mm) and each fitting's port, outlet and lengths, for result.json; {} without fittings."""
+    fittings = problem.fittings
+    if fittings is None:
+        return {}
+    ends = {}
+    for name, port, fitting in fittings.pieces():
+        outlet = fitting.outlet(port)
+        ends[name] = {"port_mm": port.point.tolist(), "port_direction": port.direction.tolist(),
+                      "outlet_mm": outlet.point.tolist(), "outlet_direction": outlet.direction.tolist(),
+                      "bend_angle_deg": fitting.bend_angle_deg, "clocking_deg": fitting.clocking_deg,
+                      "centreline_length_mm": fitting.centreline_length, "length_allowance_mm": fitting.length_allowance}
+    return {"free_length_mm": problem.hose.length, "overall_length_mm": fittings.overall_length(problem.hose.length),
+            "end_fittings": ends}

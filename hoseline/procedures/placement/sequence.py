@@ -24,6 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from hoseline.mechanics import clipped_newton
 from hoseline.mechanics.clipped_newton import clip_rolls
 from hoseline.mechanics.newton import RodProperties, end_frame_of, solve_equilibrium, total_energy
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
@@ -31,6 +32,7 @@ from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rota
 from hoseline.mechanics.stiffeners import spring_set
 from hoseline.model.clips import clip_node
 from hoseline.model.hose import MIN_SEGMENTS, Hose
+from hoseline.model.preset import preset_rest_rotations
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.continuation import (
     ContinuationLog,
@@ -52,7 +54,8 @@ __all__ = ["solve", "PlacementError", "rod_properties"]
 def rod_properties(problem: Problem) -> RodProperties:
     """Internal-unit rod properties of the problem's hose (with its stiffener springs, if any)."""
     hose = problem.hose
-    return RodProperties(hose.stiffness_vector, hose.segment_length, int(hose.segments), stiffener_springs(hose))
+    return RodProperties(hose.stiffness_vector, hose.segment_length, int(hose.segments), stiffener_springs(hose),
+                         preset_rest_rotations(hose.preset, int(hose.segments), hose.segment_length))
 
 
 def stiffener_springs(hose: Hose) -> tuple | None:
@@ -111,7 +114,9 @@ class PlacementPath:
     sits on the straight hose to the clip point, and a clip that holds the direction turns its
     frame from the start frame into the clip direction (about their cross product), roll free.
     After the place phase the roll of fixed clips is locked at the torque-free angle found
-    (locked_clips); rotating clips stay free to roll.
+    (locked_clips); rotating and sliding clips stay free to roll.  A sliding clip starts at the
+    station nearest its arc_length and the hose slides through it all along the path (its arc
+    length is an unknown of every solve).
     """
 
     def __init__(self, problem: Problem):
@@ -121,7 +126,11 @@ class PlacementPath:
         self.axis, self.angle = placement_rotation(problem)
         self.weight = weight_vector(problem)
         hose, start = problem.hose, problem.start
-        self.clip_nodes = [clip_node(clip.arc_length, hose.length, int(hose.segments)) for clip in problem.clips]
+        self.clip_nodes = [  # a sliding clip starts at the station nearest its arc_length
+            round(clip.arc_length / hose.segment_length) if clip.slides else clip_node(clip.arc_length, hose.length,
+                                                                                      int(hose.segments))
+            for clip in problem.clips
+        ]
         self.clip_turns = [
             tangent_turn(start.direction, clip.direction, clip.point - start.point, hose.length) if clip.holds_direction
             else None
@@ -130,13 +139,14 @@ class PlacementPath:
 
     def place(self, t: float) -> Clamps:
         """Clamps at fraction t of the place phase."""
-        start = self.problem.start
+        start, h = self.problem.start, self.problem.hose.segment_length
         clips = tuple(
             ClipHold(
                 node,
-                (1.0 - t) * (start.point + clip.arc_length * start.direction) + t * clip.point,
+                (1.0 - t) * (start.point + node * h * start.direction) + t * clip.point,
                 None if turn is None else self.start_frame @ rotation_matrix(turn[0] * (turn[1] * t)).T,
                 turn is not None,
+                clip.slides,
             )
             for clip, node, turn in zip(self.problem.clips, self.clip_nodes, self.clip_turns)
         )
@@ -201,10 +211,7 @@ def solve(
 
     result = build_result(problem, props, final, state, lock_angle_deg, log, started, residual)
     others = fork_branches(props, final, state, log.forks, sequence.finish)
-    if problem.clips:  # the symmetry search knows the mounts only
-        result.events.append("uniqueness: the symmetry images were not searched (the problem has clips)")
-    else:
-        others += symmetric_images(problem, props, final, state, lock_angle_deg)
+    others += symmetric_images(problem, props, final, state, lock_angle_deg)  # with clips: those they allow
     others = judge_uniqueness(result, props, final, state, others, log.forks)
     if alternatives:
         result.alternatives = [
@@ -213,14 +220,15 @@ def solve(
         ]
     if estimate_error:
         coarse_count = coarse_segments(props.segments, MIN_SEGMENTS)
-        coarse_final = _coarse_clamps(final, state, props.segments, coarse_count)
+        coarse_final = _coarse_clamps(final, state, props.segments, coarse_count, props.length)
         if coarse_final is None:
             result.events.append(f"accuracy: the discretisation error is not estimated: a clip is not on a station of "
-                                 f"the {coarse_count}-segment hose of the coarse solve (use an even station count)")
-        else:
-            coarse = replace(problem, hose=replace(problem.hose, segments=coarse_count))
+                                 f"the {coarse_count}-segment hose of the coarse solve, or two held stations are less "
+                                 "than two segments apart there (use an even station count, or more segments)")
+        else:  # the coarse rod only: its clamps carry the clips on the coarse stations
+            coarse = replace(problem, hose=replace(problem.hose, segments=coarse_count), clips=())
             result.discretisation_error = richardson_error(props, rod_properties(coarse), coarse_final, state,
-                                                           control.tolerance)
+                                                           control.tolerance, final)
     result.wall_time = time.perf_counter() - started
     return result
 
@@ -231,6 +239,10 @@ class _Sequence:
 
     def __init__(self, problem: Problem, props: RodProperties, control: StepControl, progress: Progress | None):
         self.problem, self.props, self.control, self.progress = problem, props, control, progress
+        if problem.hose.stiffeners is not None and any(clip.slides for clip in problem.clips):
+            raise PlacementError("placement: a sliding clip on a hose with stiffeners is not supported (the springs' "
+                                 "law under the stretch of the spans next to the clip is not modelled); use a rotating "
+                                 "clip at a chosen arc_length or remove the stiffeners")
         self.path = PlacementPath(problem)
         self.place_props = replace(props, springs=None)  # stiffener springs come in once placed (stiffening.py)
         self.locked_frame: np.ndarray | None = None  # of the main run, for forks met while twisting
@@ -249,7 +261,7 @@ class _Sequence:
             locked_frame = end_frame_of(place_path(1.0), state)
             lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))
             locked_clips, free_rolls = self.path.locked_clips(state)
-            state = RodState(state.frames, state.end_force, 0.0, state.clip_forces, free_rolls)
+            state = RodState(state.frames, state.end_force, 0.0, state.clip_forces, free_rolls, state.clip_arc_lengths)
             fraction = 0.0
             if self.locked_frame is None:
                 self.locked_frame, self.lock_angle_deg, self.locked_clips = locked_frame, lock_angle_deg, locked_clips
@@ -278,7 +290,50 @@ class _Sequence:
                 f"placement: the final equilibrium is not a converged stable state (residual {report.residual:.2e}, "
                 f"{report.unstable_directions} unstable directions)"
             )
+        if any(clip.sliding for clip in final.clips):
+            final, state, report = _remesh_sliding(props, final, state, report, control.tolerance, log)
         return final, state, lock_angle_deg, report.residual
+
+
+def _remesh_sliding(props: RodProperties, final: Clamps, state: RodState, report, tolerance: float,
+                    log: ContinuationLog):
+    """Move each sliding clip to the station nearest the arc length it slid to, and solve again.
+
+    While it slides, a sliding clip keeps its station and the spans next to it stretch or shrink
+    (clipped_newton.segment_lengths); far from where it started the segments are unequal, which
+    costs accuracy.  Here the clip's station becomes the one nearest its arc length (the frames
+    resampled at the new segment centres, Newton from there), until no clip moves (at most four
+    rounds); a round whose solve fails is dropped with an event, keeping the shape before it.
+    Returns (final clamps, state, Newton report)."""
+    h, count = props.segment_length, props.segments
+    for _ in range(4):
+        arcs = clipped_newton.clip_arc_lengths(props, final, state)
+        nodes = [min(max(round(float(arc) / h), 1), count - 1) if clip.sliding else clip.node
+                 for clip, arc in zip(final.clips, arcs)]
+        if nodes == [clip.node for clip in final.clips]:
+            break
+        if any(b - a < 2 for a, b in zip([0] + nodes, nodes + [count])):  # a span of one segment is a rigid link
+            log.events.append("sliding clips: kept on their stations (the stations nearest their arc lengths leave "
+                              "a span of one segment)")
+            break
+        moved = replace(final, clips=tuple(replace(clip, node=node) for clip, node in zip(final.clips, nodes)))
+        old_s = np.concatenate([[0.0], np.cumsum(clipped_newton.segment_lengths(props, final, state)[0])])
+        new_lengths = clipped_newton.segment_lengths(props, moved, state)[0]
+        centres = np.cumsum(new_lengths) - 0.5 * new_lengths
+        inside = np.clip(np.searchsorted(old_s, centres) - 1, 0, count - 1)
+        guess = RodState(state.frames[inside].copy(), state.end_force.copy(), state.roll, state.clip_forces.copy(),
+                         state.clip_rolls.copy(), state.clip_arc_lengths.copy())
+        solved, moved_report = solve_equilibrium(props, moved, guess, tolerance=tolerance)
+        log.iterations += moved_report.iterations
+        if not moved_report.converged or moved_report.unstable_directions != 0:
+            log.events.append("sliding clips: the solve on the stations nearest their arc lengths failed "
+                              f"({moved_report.message or 'unstable'}); kept the stretched segments")
+            break
+        final, state, report = moved, solved, moved_report
+        log.events.append("sliding clips: moved to the stations nearest their arc lengths "
+                          + ", ".join(f"{float(a):.6g} mm" for a, clip in zip(state.clip_arc_lengths, final.clips)
+                                      if clip.sliding))
+    return final, state, report
 
 
 def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.ndarray, log: ContinuationLog) -> RodState:
@@ -330,20 +385,31 @@ def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.
     )
 
 
-def _coarse_clamps(final: Clamps, state: RodState, segments: int, coarse_segments: int) -> Clamps | None:
+def _coarse_clamps(final: Clamps, state: RodState, segments: int, coarse_segments: int, length: float) -> Clamps | None:
     """The final clamps for the coarse solve of the error estimate: the clips on the coarse
-    stations, rotating clips turned by the roll they found (so the coarse solve starts from zero
-    roll); None if a clip falls between coarse stations."""
+    stations, rotating and sliding clips turned by the roll they found (so the coarse solve starts
+    from zero roll), a sliding clip on the coarse station nearest the arc length it found (length:
+    the hose's, mm); None if a fixed, rotating or ball clip falls between coarse stations."""
     if not final.clips:
         return final
-    if 2 * coarse_segments != segments or any(clip.node % 2 for clip in final.clips):
+    if 2 * coarse_segments != segments or any(clip.node % 2 for clip in final.clips if not clip.sliding):
         return None
     rolls = clip_rolls(final, state)
+    arcs = state.clip_arc_lengths if state.clip_arc_lengths.shape == (len(final.clips),) else None
+
+    def coarse_node(j: int, clip: ClipHold) -> int:
+        if clip.sliding and arcs is not None:
+            return round(float(arcs[j]) * coarse_segments / length)
+        return clip.node // 2
+
     clips = tuple(
-        replace(clip, node=clip.node // 2,
+        replace(clip, node=coarse_node(j, clip),
                 frame=clip.frame if not clip.roll_free else clip.frame @ rotation_matrix(roll * clip.frame[2]).T)
-        for clip, roll in zip(final.clips, rolls)
+        for j, (clip, roll) in enumerate(zip(final.clips, rolls))
     )
+    held = [0] + [clip.node for clip in clips] + [coarse_segments]
+    if any(b - a < 2 for a, b in zip(held[:-1], held[1:])):  # a span of one segment is a rigid link
+        return None
     return replace(final, clips=clips)
 
 

@@ -10,7 +10,7 @@ import numpy as np
 from hoseline.mechanics import clipped_newton
 from hoseline.mechanics.energy import elastic_energy
 from hoseline.mechanics.newton import RodProperties, evaluate
-from hoseline.mechanics.rod import Clamps, RodState, centerline, gravity_energy
+from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model.mounts import single_plane_offset
 from hoseline.model.problem import Problem
@@ -44,9 +44,13 @@ def build_result(
     started: time.perf_counter() at the start of the solve.  residual: final relative residual.
     """
     h = props.segment_length
-    n_seg = props.segments
-    s = h * np.arange(n_seg + 1)
-    nodes = centerline(state.frames, clamps.start_point, h)
+    if clamps.clips:  # each segment of its own length: a sliding clip stretches its spans
+        lengths = clipped_newton.segment_lengths(props, clamps, state)[0]
+        s, nodes = clipped_newton.station_positions(props, clamps, state)
+    else:
+        lengths, s = np.full(props.segments, h), h * np.arange(props.segments + 1)
+        nodes = centerline(state.frames, clamps.start_point, h)
+    weight_energy = float(-np.sum(lengths * ((0.5 * (nodes[1:] + nodes[:-1]) - clamps.start_point) @ clamps.line_weight)))
     moments, darboux, node_tangent = station_moments(props, clamps, state)
     twisting = np.einsum("ij,ij->i", moments, node_tangent)
     bending = np.linalg.norm(moments - twisting[:, None] * node_tangent, axis=1)
@@ -54,9 +58,12 @@ def build_result(
     internal_force = state.end_force[None, :] + (props.length - s)[:, None] * clamps.line_weight[None, :]
     clips = clip_reactions(problem, props, clamps, state)
     for clip in clips:  # the clips beyond a station hold the part beyond it too
-        internal_force[s < clip.arc_length - 0.5 * h] += clip.force
+        internal_force[s < clip.arc_length - 0.5 * float(np.min(lengths))] += clip.force
     system = evaluate(props, clamps, state)
-    values, _ = smallest_eigenpairs(system.band, system.jac_t, count=1)
+    if isinstance(system, clipped_newton.SlidingSystem):
+        values = [clipped_newton.smallest_sliding_eigenvalue(system, h)]
+    else:
+        values, _ = smallest_eigenpairs(system.band, system.jac_t, count=1)
     margin = float(values[0]) / h  # per unit length: independent of the segment count
     events = list(log.events)
     if abs(margin) < NEUTRAL_MARGIN * neutral_scale(props, clamps, state):
@@ -87,16 +94,17 @@ def build_result(
         end_force=state.end_force.copy(),
         end_moment=moments[-1].copy(),
         elastic_energy=float(
-            system.energy - gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h) if clips
-            else elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs)
+            system.energy - weight_energy if clips
+            else elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs,
+                                props.rest)
         ),
-        gravity_energy=gravity_energy(state.frames, clamps.start_point, clamps.line_weight, h),
+        gravity_energy=weight_energy,
         stability_margin=margin,
         lock_angle_deg=lock_angle_deg,
         min_bend_radius=min_radius,
         bend_radius_margin=None if limit is None else min_radius - limit,
         single_plane_offset=single_plane_offset(problem.start, problem.end),
-        length_error=abs(float(np.sum(np.linalg.norm(state.frames[:, 2], axis=1))) * h - props.length) / props.length,
+        length_error=abs(float(np.sum(lengths * np.linalg.norm(state.frames[:, 2], axis=1))) - props.length) / props.length,
         iterations=log.iterations,
         steps=log.steps,
         wall_time=time.perf_counter() - started,
@@ -111,7 +119,10 @@ def clip_reactions(problem: Problem, props: RodProperties, clamps: Clamps, state
     if not clamps.clips:
         return []
     forces, moments = clipped_newton.clip_reactions(props, clamps, state)
+    arc_lengths = clipped_newton.clip_arc_lengths(props, clamps, state)  # where sliding clips came to rest
+    _, _, frames, framed, _ = clipped_newton.clip_arrays(clamps, state)  # with the rolls found
     return [
-        ClipReaction(clip.kind, clip.name, clip.arc_length, clip.point.copy(), force, moment)
-        for clip, force, moment in zip(problem.clips, forces, moments)
+        ClipReaction(clip.kind, clip.name, float(arc) if clip.slides else clip.arc_length, clip.point.copy(), force,
+                     moment, frame.copy() if held else None)
+        for clip, force, moment, arc, frame, held in zip(problem.clips, forces, moments, arc_lengths, frames, framed)
     ]

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.mechanics.rotations import rotation_matrix
@@ -42,8 +43,11 @@ def _roll_all(frames: np.ndarray, angle: float) -> np.ndarray:
 def _symmetries(problem: Problem, props: RodProperties) -> list[tuple[np.ndarray, bool]]:
     """Orthogonal maps (about the start point) that map the mounts and gravity onto themselves.
 
-    Returns (matrix, is_reflection) pairs.
+    Returns (matrix, is_reflection) pairs; none for a preset hose (its natural curvature, fixed
+    to the material, is not mapped onto itself).
     """
+    if props.rest is not None:
+        return []
     t0, t1 = problem.start.direction, -problem.end.direction
     delta = problem.end.point - problem.start.point
     tol = 1e-9
@@ -62,6 +66,31 @@ def _symmetries(problem: Problem, props: RodProperties) -> list[tuple[np.ndarray
     if abs(np.dot(gravity, normal)) > tol * (1.0 + np.linalg.norm(gravity)):
         return []
     return [(np.eye(3) - 2.0 * np.outer(normal, normal), True)]
+
+
+def _clip_images(clamps: Clamps, state: RodState, matrix: np.ndarray, body: np.ndarray, roll: float,
+                 length: float) -> np.ndarray | None:
+    """The clip rolls (rad) of the image of `state` under the map x -> start + matrix (x - start) (frames
+    turned by `body` and rolled back by `roll`), or None when the map moves a clip: its point, its
+    direction, or for a fixed clip its frame (a rotating or sliding clip's frame may roll: the image's
+    roll is the angle that takes the clip frame to its image)."""
+    if not clamps.clips:
+        return np.zeros(0)
+    _, _, frames, _, _ = clip_arrays(clamps, state)
+    rolls = np.zeros(len(clamps.clips))
+    for j, (clip, frame) in enumerate(zip(clamps.clips, frames)):
+        point = clamps.start_point + matrix @ (clip.point - clamps.start_point)
+        if np.linalg.norm(point - clip.point) > 1e-9 * length:
+            return None
+        if clip.frame is None:
+            continue
+        image = _roll_all((body @ frame @ matrix.T)[None], roll)[0]
+        if np.max(np.abs(image[2] - clip.frame[2])) > 1e-6:
+            return None
+        rolls[j] = _roll_angle(clip.frame, image)
+        if not clip.roll_free and abs(rolls[j]) > 1e-6:
+            return None
+    return rolls
 
 
 def equivalent_states(
@@ -86,7 +115,11 @@ def equivalent_states(
             end_image = _roll_all(end_image[None], roll)[0]
         if np.max(np.abs(end_image - clamps.end_frame)) > 1e-6:
             continue
-        image = RodState(frames, matrix @ state.end_force, 0.0)
+        clip_rolls = _clip_images(clamps, state, matrix, body, roll, props.length)
+        if clip_rolls is None:
+            continue
+        image = RodState(frames, matrix @ state.end_force, 0.0, clip_forces(clamps, state) @ matrix.T, clip_rolls,
+                         state.clip_arc_lengths.copy())
         image_nodes = centerline(frames, clamps.start_point, props.segment_length)
         if np.max(np.abs(image_nodes - nodes)) > 1e-6 * props.length:
             images.append((image, reflection))

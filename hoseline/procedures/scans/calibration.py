@@ -11,8 +11,16 @@ Identifiability.  Without weight (mass_per_length or gravity zero) the shape dep
 stiffness ratios only: EI scales out, so only the torsion factor (GJ over the isotropic
 EI/(1 + nu)) can be fitted.  With weight the shape depends on the weight per EI, so EI and
 mass_per_length cannot both be fitted.  Such parameters are refused before the fit with a
-note; after it, parameters whose relative uncertainty (from the Jacobian) exceeds
-UNIDENTIFIABLE_RELATIVE_STD are reported as not identified by the scans.  Units: mm, N*mm^2, kg/m.
+note; after it, parameters whose relative uncertainty exceeds UNIDENTIFIABLE_RELATIVE_STD are
+reported as not identified by the scans, and so are those a fixed parameter would move by more
+than their uncertainty if freed, when it would remove most of the remaining misfit
+(_fixed_parameter_effects).
+
+Uncertainty.  Two parts in quadrature: the scatter, s^2 (J^T J)^-1 times the variance inflation
+of residuals correlated along the hose (scatter_inflation), and the discretisation, from one
+evaluation with twice the segments (_model_error).  Failures (a parameter at its bound, limits
+missed, a flipped twist sign, a confounding fixed parameter) go to Calibration.warnings.
+Units: mm, N*mm^2, kg/m.
 """
 
 from __future__ import annotations
@@ -25,15 +33,23 @@ from scipy.optimize import least_squares
 
 from hoseline.mechanics.newton import end_frame_of, node_positions, solve_equilibrium
 from hoseline.mechanics.rod import RodState
-from hoseline.model.hose import Hose, isotropic_torsional_stiffness
+from hoseline.model.hose import DEFAULT_POISSON_RATIO, Hose, isotropic_torsional_stiffness
+from hoseline.model.preset import Preset
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.continuation import PlacementError
-from hoseline.procedures.scans.deviation import Deviation, closest_on_polyline, deviation
+from hoseline.procedures.scans.deviation import Deviation, Thresholds, closest_on_polyline, deviation
 from hoseline.procedures.placement.sequence import PlacementPath, rod_properties, solve
 from hoseline.procedures.scans.parameters import PARAMETERS
 
 UNIDENTIFIABLE_RELATIVE_STD = 0.25
+UNIDENTIFIABLE_ANGLE_STD_DEG = 15.0  # a preset angle less certain than this is not identified
+PRESET_BOUND = 4.0 * math.pi  # the preset's x (rad): the set's turn over the hose's length (two coils), or its angle
 LOG_BOUND = math.log(100.0)  # no parameter moves by more than 100x
+AT_BOUND_LOG = 0.05  # a parameter within 5 % of its bound is reported as at the bound: the fit failed
+FLIPPED_BETTER = 0.25  # the fit with the twists negated is "much better" below this fraction of the cost
+FIXED_EXPLAINS = 0.5  # a fixed parameter that would remove this fraction of the misfit confounds the fit
+PROBE_STEP = 1e-3  # relative step of a fixed parameter for its sensitivity
+PROBE_SAG = 0.01  # weight per length probed on a weightless hose: w L^3 / EI
 
 
 @dataclass(frozen=True)
@@ -46,7 +62,12 @@ class ScanCase:
 
 @dataclass
 class FittedParameter:
-    """A calibrated parameter: initial and fitted value, standard uncertainty (None if not identified)."""
+    """A calibrated parameter: initial and fitted value, standard uncertainty (None if not identified).
+
+    std = hypot(std_scatter, std_discretisation), in the parameter's unit: the scans' scatter
+    (stations correlated along the hose counted) and the model's discretisation error (4/3 of
+    the change a model of twice the segments makes).  note: why it is not identified.
+    """
 
     name: str
     unit: str
@@ -55,6 +76,8 @@ class FittedParameter:
     std: float | None
     identifiable: bool
     note: str = ""
+    std_scatter: float | None = None
+    std_discretisation: float | None = None
 
 
 @dataclass
@@ -65,6 +88,10 @@ class Calibration:
     before, after: one Deviation per scan case, with the initial and the calibrated hose.
     notes: parameters refused or not identified, and why.
     evaluations: model evaluations; warm_solves / cold_solves: how they were solved.
+    warnings: how the fit failed (a parameter at its bound, the calibrated model outside the
+        limits, a flipped twist sign, a fixed parameter that confounds the fitted ones).
+    scatter_inflation: the variance inflation from residuals correlated along the hose.
+    poisson_ratio: nu of the torsion factor's definition, GJ / (EI / (1 + nu)).
     """
 
     parameters: list[FittedParameter]
@@ -75,26 +102,47 @@ class Calibration:
     evaluations: int = 0
     warm_solves: int = 0
     cold_solves: int = 0
+    warnings: list[str] = field(default_factory=list)
+    scatter_inflation: float = 1.0
+    poisson_ratio: float = DEFAULT_POISSON_RATIO
 
 
-def hose_with(base: Hose, values: dict[str, float]) -> Hose:
-    """`base` with some of PARAMETERS changed; GJ follows EI at the given (or base) torsion factor."""
+def hose_with(base: Hose, values: dict[str, float], poisson_ratio: float = DEFAULT_POISSON_RATIO) -> Hose:
+    """`base` with some of PARAMETERS changed; GJ follows EI at the given (or base) torsion factor.
+
+    poisson_ratio: nu of the torsion factor's definition, GJ / (EI / (1 + nu)) (the problem file's).
+    """
     bending = values.get("bending_stiffness", base.bending_stiffness)
-    factor = values.get("torsion_factor", base.torsion_factor)
+    factor = values.get("torsion_factor", current_value(base, "torsion_factor", poisson_ratio))
     second = None if base.bending_stiffness_2 is None else base.bending_stiffness_2 * bending / base.bending_stiffness
     return replace(
         base,
         bending_stiffness=bending,
         bending_stiffness_2=second,
-        torsional_stiffness=factor * isotropic_torsional_stiffness(bending),
+        torsional_stiffness=factor * isotropic_torsional_stiffness(bending, poisson_ratio),
         mass_per_length=values.get("mass_per_length", base.mass_per_length),
         length=values.get("length", base.length),
+        preset=_preset_with(base, values),
     )
 
 
-def current_value(hose: Hose, name: str) -> float:
-    """The value of one of PARAMETERS for a hose."""
-    return hose.torsion_factor if name == "torsion_factor" else float(getattr(hose, name))
+def _preset_with(base: Hose, values: dict[str, float]) -> Preset | None:
+    """The base hose's preset with preset_curvature (1/mm; a negative one turns the set round), preset_angle (deg)."""
+    if "preset_curvature" not in values and "preset_angle" not in values:
+        return base.preset
+    curvature = values.get("preset_curvature", current_value(base, "preset_curvature"))
+    angle = values.get("preset_angle", current_value(base, "preset_angle"))
+    return Preset(abs(curvature), math.remainder(angle + (180.0 if curvature < 0.0 else 0.0), 360.0))
+
+
+def current_value(hose: Hose, name: str, poisson_ratio: float = DEFAULT_POISSON_RATIO) -> float:
+    """The value of one of PARAMETERS for a hose; the torsion factor is GJ / (EI / (1 + poisson_ratio))."""
+    if name == "torsion_factor":
+        return hose.torsional_stiffness / isotropic_torsional_stiffness(hose.bending_stiffness, poisson_ratio)
+    if name in ("preset_curvature", "preset_angle"):
+        preset = hose.preset or Preset(0.0)
+        return preset.curvature if name == "preset_curvature" else preset.angle_deg
+    return float(getattr(hose, name))
 
 
 class WarmStartedModel:
@@ -121,8 +169,9 @@ class WarmStartedModel:
 
     def _cold(self, problem: Problem) -> list[np.ndarray]:
         """Full placements by continuation; their states start the next warm solve."""
-        placed = solve(replace(problem, end_twist_deg=0.0))
-        results = [placed if twist == 0.0 else solve(replace(problem, end_twist_deg=twist)) for twist in self.twists]
+        placed = solve(replace(problem, end_twist_deg=0.0), estimate_error=False)
+        results = [placed if twist == 0.0 else solve(replace(problem, end_twist_deg=twist), estimate_error=False)
+                   for twist in self.twists]
         self.place_state = RodState(placed.frames, placed.end_force, math.radians(placed.lock_angle_deg))
         self.twisted_states = [RodState(r.frames, r.end_force) for r in results]
         return [r.centerline for r in results]
@@ -176,6 +225,8 @@ def calibrate(
     fit: list[str] = ("bending_stiffness", "torsion_factor"),
     *,
     max_evaluations: int = 60,
+    poisson_ratio: float = DEFAULT_POISSON_RATIO,
+    thresholds: list[Thresholds] | None = None,
 ) -> Calibration:
     """Least-squares fit of `fit` (names from PARAMETERS) so the model matches the scans.
 
@@ -183,45 +234,293 @@ def calibrate(
     has its own).  cases: scans of the same hose in the same mounts at various twists.
     max_evaluations: evaluations allowed to the least-squares iterations (each solves every
     case); the finite-difference Jacobian costs one more evaluation per fitted parameter and
-    is not counted here (scipy's max_nfev).
+    is not counted here (scipy's max_nfev).  poisson_ratio: nu in the torsion factor's
+    definition, GJ / (EI / (1 + nu)) (the problem file's hose.poisson_ratio).  thresholds:
+    the deviation limits per case (default: the thesis', Thresholds.thesis of its twist); a
+    fit that leaves a case above them is warned about.
+
+    Failures are said in Calibration.warnings: a parameter at its bound, a calibrated model
+    still outside the limits (then the fit is tried again with every twist negated, and a
+    much better fit there is reported as a flipped twist sign, not used), and a fixed
+    parameter that explains the remaining misfit better than the fitted ones.
     """
     names, notes = identifiable_parameters(problem, list(fit))
-    model = WarmStartedModel(problem, [case.twist_deg for case in cases])
-    initial = {name: current_value(problem.hose, name) for name in names}
-
-    def hose_at(x: np.ndarray) -> Hose:
-        return hose_with(problem.hose, {name: initial[name] * math.exp(v) for name, v in zip(names, x)})
-
-    before = [deviation(line, case.points) for line, case in zip(model.centerlines(problem.hose), cases)]
+    limits = thresholds if thresholds is not None else [Thresholds.thesis(case.twist_deg) for case in cases]
+    if len(limits) != len(cases):
+        raise ValueError(f"thresholds: {len(limits)} given for {len(cases)} scans; give one per scan")
+    fitter = _Fitter(problem, cases, names, poisson_ratio)
+    before = fitter.deviations(problem.hose)
     if not names:
-        return Calibration([], problem.hose, before, before, notes, 1, model.warm_solves, model.cold_solves)
-    station_count = sum(case.points.shape[0] for case in cases)
-
-    def residuals(x: np.ndarray) -> np.ndarray:
-        try:
-            lines = model.centerlines(hose_at(x))
-        except PlacementError:
-            return np.full(3 * station_count, 1e3)  # an unsolvable hose: a very poor fit
-        return np.concatenate([(case.points - closest_on_polyline(case.points, line)[2]).ravel()
-                               for line, case in zip(lines, cases)])
-
-    solution = least_squares(residuals, np.zeros(len(names)), bounds=(-LOG_BOUND, LOG_BOUND), x_scale=1.0,
-                             diff_step=1e-4, max_nfev=max_evaluations)
+        return Calibration([], problem.hose, before, before, notes, *fitter.solve_counts(), poisson_ratio=poisson_ratio)
+    solution = fitter.fit(max_evaluations)
+    hose = fitter.hose_at(solution.x)
+    after = fitter.deviations(hose)
     # each residual vector is normal to the model centreline (closest point): two degrees of freedom per station
-    relative_std = _relative_std(solution.jac, solution.fun, 2 * station_count)
+    inflation = scatter_inflation([row.reshape(-1, 3) for row in fitter.split(solution.fun)])
+    scatter_std = math.sqrt(inflation) * _relative_std(solution.jac, solution.fun, 2 * fitter.station_count)
+    model_error = _model_error(fitter, solution)
+    discretisation_std = _discretisation_std(solution, model_error)
+    total_std = np.hypot(scatter_std, discretisation_std)
+    warnings, confounded = [], {}
+    for effect in _fixed_parameter_effects(fitter, solution, total_std, model_error):
+        confounded.update({name: effect for name in effect.moves})
+        warnings.append(effect.message(fitter, solution.x))
     parameters = []
-    for name, x, std in zip(names, solution.x, relative_std):
-        value = initial[name] * math.exp(x)
-        identified = bool(np.isfinite(std) and std <= UNIDENTIFIABLE_RELATIVE_STD)
-        note = "" if identified else "not determined by these scans (relative uncertainty above 25 %)"
-        if not identified:
+    for name, x, std, scatter, floor in zip(names, solution.x, total_std, scatter_std, discretisation_std):
+        value, std, scatter, floor = fitter.value(name, x), *(fitter.std(name, x, v) for v in (std, scatter, floor))
+        if name in ("preset_curvature", "preset_angle"):  # as the hose holds them: a negative curvature turns the set
+            value = current_value(hose, name)
+        at_bound = fitter.at_bound(name, x)
+        if at_bound:
+            note = f"at its bound ({value:.4g}, 100x from the initial {fitter.initial[name]:.4g}): the fit failed"
+            warnings.append(f"{name} ran to its bound, {value:.4g} (100x from the initial {fitter.initial[name]:.4g}): "
+                            "the fit failed and the value is not a measurement")
+        elif name in confounded:
+            note = f"confounded with {confounded[name].name}, which the fit held fixed"
+        elif not fitter.determined(name, value, std):
+            note = ("not determined by these scans (uncertainty above "
+                    f"{f'{UNIDENTIFIABLE_ANGLE_STD_DEG:g} deg' if name == 'preset_angle' else '25 %'})")
             notes.append(f"{name}: {note}; the value is not a measurement")
-        parameters.append(FittedParameter(name, PARAMETERS[name], initial[name], value,
-                                          value * std if identified else None, identified, note))
-    hose = hose_at(solution.x)
-    after = [deviation(line, case.points) for line, case in zip(model.centerlines(hose), cases)]
-    return Calibration(parameters, hose, before, after, notes, model.warm_solves + model.cold_solves,
-                       model.warm_solves, model.cold_solves)
+        else:
+            note = ""
+        identified = not note
+        parameters.append(FittedParameter(name, PARAMETERS[name], fitter.initial[name], value,
+                                          std if identified else None, identified, note,
+                                          *(v if np.isfinite(v) else None for v in (scatter, floor))))
+    missed = [(case, d, limit) for case, d, limit in zip(cases, after, limits) if not d.passes(limit)]
+    for case, d, limit in missed:
+        warnings.append(f"after the fit the scan at {case.twist_deg + 0.0:g} deg still deviates by {d.mean:.3g} mm on "
+                        f"average (largest {d.max:.3g} mm), above its limit of {_limit_text(limit)}: the calibrated "
+                        "model does not describe this scan")
+    at_bound = any(fitter.at_bound(name, x) for name, x in zip(names, solution.x))
+    if (missed or at_bound) and any(c.twist_deg for c in cases):
+        warnings += _flipped_twist_warning(fitter, solution, max_evaluations)
+    return Calibration(parameters, hose, before, after, notes, *fitter.solve_counts(), warnings=warnings,
+                       scatter_inflation=inflation, poisson_ratio=poisson_ratio)
+
+
+class _Fitter:
+    """The residuals of the scans against the model, as a function of the log-parameters x.
+
+    A parameter's value is its initial value times exp(x), except the preset's (value): there
+    x is the change of the angle the set turns the hose through over its length (rad) or of the
+    set's angle (rad).  Residuals are the vectors from each scan station to the closest point
+    of the model centreline at the scan's twist, mm.
+    """
+
+    def __init__(self, problem: Problem, cases: list[ScanCase], names: list[str], poisson_ratio: float):
+        self.problem, self.cases, self.names, self.poisson_ratio = problem, cases, names, poisson_ratio
+        self.initial = {name: current_value(problem.hose, name, poisson_ratio) for name in names}
+        self.model = WarmStartedModel(problem, [case.twist_deg for case in cases])
+        self.station_count = sum(case.points.shape[0] for case in cases)
+
+    def hose_at(self, x: np.ndarray, fixed: dict[str, float] | None = None) -> Hose:
+        """The hose at log-parameters x, with some fixed parameters changed too (values in their units)."""
+        values = {name: self.value(name, v) for name, v in zip(self.names, x)}
+        return hose_with(self.problem.hose, values | (fixed or {}), self.poisson_ratio)
+
+    def _step(self, name: str) -> float:
+        # the preset's unit per unit of x (class doc): 1/mm per radian turned over the length, or degrees per radian
+        return 1.0 / self.problem.hose.length if name == "preset_curvature" else math.degrees(1.0)
+
+    def value(self, name: str, x: float) -> float:
+        """The value of parameter `name` at its x, in its unit (PARAMETERS)."""
+        if name in ("preset_curvature", "preset_angle"):
+            return self.initial[name] + x * self._step(name)
+        return self.initial[name] * math.exp(x)
+
+    def std(self, name: str, x: float, std_x: float) -> float:
+        """A standard uncertainty of x in the parameter's unit."""
+        return std_x * (self._step(name) if name in ("preset_curvature", "preset_angle") else self.value(name, x))
+
+    def determined(self, name: str, value: float, std: float) -> bool:
+        """Whether the scans determine the parameter: within UNIDENTIFIABLE_RELATIVE_STD (the angle: _ANGLE_STD_DEG)."""
+        if name == "preset_angle":
+            return bool(np.isfinite(std) and std <= UNIDENTIFIABLE_ANGLE_STD_DEG)
+        return bool(np.isfinite(std) and std <= UNIDENTIFIABLE_RELATIVE_STD * abs(value))
+
+    def at_bound(self, name: str, x: float) -> bool:
+        """Whether x ran to its bound (the fit failed)."""
+        bound = PRESET_BOUND if name in ("preset_curvature", "preset_angle") else LOG_BOUND
+        return bound - abs(x) < AT_BOUND_LOG
+
+    def residuals(self, hose: Hose, model: WarmStartedModel | None = None) -> np.ndarray:
+        """(3 stations,) residual vector components of every case, mm (1e3 for a hose the solver cannot place)."""
+        try:
+            lines = (model or self.model).centerlines(hose)
+        except PlacementError:
+            return np.full(3 * self.station_count, 1e3)  # an unsolvable hose: a very poor fit
+        return np.concatenate([(case.points - closest_on_polyline(case.points, line)[2]).ravel()
+                               for line, case in zip(lines, self.cases)])
+
+    def split(self, vector: np.ndarray) -> list[np.ndarray]:
+        """A residual vector cut into its cases."""
+        return np.split(vector, np.cumsum([3 * case.points.shape[0] for case in self.cases])[:-1])
+
+    def fit(self, max_evaluations: int):
+        """scipy's least_squares result from x = 0 (the initial values)."""
+        bound = np.array([PRESET_BOUND if name in ("preset_curvature", "preset_angle") else LOG_BOUND
+                          for name in self.names])
+        # diff_step is relative to |x| (1 at 0): the preset's x are radians, the others log-values
+        return least_squares(lambda x: self.residuals(self.hose_at(x)), np.zeros(len(self.names)),
+                             bounds=(-bound, bound), x_scale=1.0, diff_step=1e-4, max_nfev=max_evaluations)
+
+    def deviations(self, hose: Hose) -> list[Deviation]:
+        """Deviation of each case from the model of `hose`."""
+        return [deviation(line, case.points) for line, case in zip(self.model.centerlines(hose), self.cases)]
+
+    def solve_counts(self) -> tuple[int, int, int]:
+        """(evaluations, warm solves, cold solves) of the model so far."""
+        return self.model.warm_solves + self.model.cold_solves, self.model.warm_solves, self.model.cold_solves
+
+
+def scatter_inflation(residuals: list[np.ndarray]) -> float:
+    """Variance inflation 1 + 2 sum_k rho_k from the correlation of residuals along the hose.
+
+    residuals: per scan, (n, 3) residual vectors of its stations in order along the hose, mm.
+    Neighbouring stations of a fitted scan centreline share scan points (sections two diameters
+    long, one radius apart), so their errors are correlated and n stations carry the
+    information of n / inflation independent ones.  rho_k is the lag-k autocorrelation of the
+    residual vectors pooled over the scans, summed while positive (the initial positive
+    sequence); an unwanted smooth misfit (model error) also correlates, and inflates too.
+    """
+    total = sum(float(np.sum(r * r)) for r in residuals)
+    if total == 0.0:
+        return 1.0
+    inflation = 1.0
+    for lag in range(1, max(r.shape[0] for r in residuals) // 2):
+        rho = sum(float(np.sum(r[lag:] * r[:-lag])) for r in residuals if r.shape[0] > lag) / total
+        if rho <= 0.0:
+            break
+        inflation += 2.0 * rho
+    return inflation
+
+
+def _model_error(fitter: _Fitter, solution) -> np.ndarray:
+    """The N-segment model's own error in the residuals at the fit, estimated as 4/3 of their change
+    with a model of twice the segments (the model converges at order 2, so the N-segment one is off
+    by 4/3 of its distance to the 2N one), mm.  Call it right after an evaluation at the fit: the
+    model's last equilibria start the finer one."""
+    fine_problem = replace(fitter.problem, hose=replace(fitter.problem.hose, segments=2 * fitter.problem.hose.segments))
+    fine_model = WarmStartedModel(fine_problem, [case.twist_deg for case in fitter.cases])
+    if fitter.model.place_state is not None:  # Newton from the fit's equilibria, each segment cut in two halves
+        fine_model.place_state = replace(fitter.model.place_state,
+                                         frames=np.repeat(fitter.model.place_state.frames, 2, axis=0))
+        fine_model.twisted_states = [replace(state, frames=np.repeat(state.frames, 2, axis=0))
+                                     for state in fitter.model.twisted_states]
+    fine = fitter.residuals(replace(fitter.hose_at(solution.x), segments=fine_problem.hose.segments), fine_model)
+    return 4.0 / 3.0 * (fine - solution.fun)
+
+
+def _discretisation_std(solution, model_error: np.ndarray) -> np.ndarray:
+    """Standard uncertainty of each parameter's x from the discretisation: the Gauss-Newton step that
+    removing the model error from the residuals takes from the fit."""
+    step, *_ = np.linalg.lstsq(solution.jac, -model_error, rcond=1e-8)
+    return np.abs(step)
+
+
+@dataclass
+class _FixedEffect:
+    """What freeing one fixed parameter would do, to first order, from the fit.
+
+    name: the fixed parameter; value: its value, change: its predicted change, in its unit.
+    explained: the fraction of the remaining squared residual it would remove.  shifts: the
+    change of each fitted parameter's x.  moves: the fitted parameters it moves by more than
+    their uncertainty.
+    """
+
+    name: str
+    value: float
+    change: float
+    explained: float
+    shifts: np.ndarray
+    moves: list[str]
+
+    def message(self, fitter: _Fitter, x: np.ndarray) -> str:
+        """The warning: which fitted parameters are not identified, and what the scans look like."""
+        more, less = _LOOKS.get(self.name, (f"to have a larger {self.name}", f"to have a smaller {self.name}"))
+        moved = ", ".join(f"{name} from {fitter.value(name, v):.4g} to about {fitter.value(name, v + shift):.4g}"
+                          for name, v, shift in zip(fitter.names, x, self.shifts) if name in self.moves)
+        return (f"{' and '.join(self.moves)} not identified: the scans look {more if self.change > 0 else less} than "
+                f"the problem file says ({self.name} = {self.value:.4g}): freeing {self.name} (to about "
+                f"{self.value + self.change:.3g}) would explain {self.explained:.0%} of the remaining misfit and move "
+                f"{moved}; correct {self.name} in the problem file, or fit it too")
+
+
+_LOOKS = {"mass_per_length": ("heavier", "lighter"), "length": ("longer", "shorter"),
+          "bending_stiffness": ("stiffer in bending", "softer in bending"),
+          "torsion_factor": ("stiffer in torsion", "softer in torsion")}
+
+
+def _fixed_parameter_effects(fitter: _Fitter, solution, total_std: np.ndarray,
+                             model_error: np.ndarray) -> list[_FixedEffect]:
+    """The fixed parameters that would explain much of the remaining misfit and move a fitted one.
+
+    For each parameter of PARAMETERS not fitted (and not scaled out by a weightless hose), one
+    more model evaluation gives the residual's sensitivity to it; its part orthogonal to the
+    fitted parameters' sensitivities predicts, to first order, what freeing it would gain
+    (the fraction of the squared residual it removes) and how far the fitted ones would move.
+    Reported when it would remove more than FIXED_EXPLAINS of the misfit, more misfit than the
+    model's own discretisation error (`model_error`, mm, outside what the fitted parameters
+    absorb) amounts to, and move a fitted parameter by more than its uncertainty.
+    """
+    problem, hose = fitter.problem, fitter.hose_at(solution.x)
+    gravity = float(np.linalg.norm(problem.gravity))
+    weightless = hose.mass_per_length == 0.0 or gravity == 0.0
+    residual, jacobian = solution.fun, solution.jac
+    absorbed, *_ = np.linalg.lstsq(jacobian, model_error, rcond=1e-8)
+    unexplained_model_error = float(np.sum((model_error - jacobian @ absorbed) ** 2))
+    effects = []
+    for name in PARAMETERS:
+        if name in fitter.names or (name == "bending_stiffness" and weightless):
+            continue
+        value = current_value(hose, name, fitter.poisson_ratio)
+        if value != 0.0:
+            step = PROBE_STEP * value
+        elif name == "mass_per_length" and gravity > 0.0:
+            # no weight yet: w L^3 / EI = PROBE_SAG moves the hose by hundredths of a mm, within the linear range
+            step = PROBE_SAG * hose.bending_stiffness / (hose.length**3 * gravity * 1e-3)
+        else:
+            continue
+        try:
+            column = (fitter.residuals(fitter.hose_at(solution.x, {name: value + step})) - residual) / step
+        except ValueError:  # a value the problem refuses, e.g. a length that moves clips off their stations
+            continue
+        along, *_ = np.linalg.lstsq(jacobian, column, rcond=1e-8)
+        orthogonal = column - jacobian @ along
+        norm2 = float(orthogonal @ orthogonal)
+        if norm2 <= (1e-6 * float(column @ column)) or not residual.any():
+            continue  # moves the model as the fitted parameters do: nothing to tell apart
+        change = -float(orthogonal @ residual) / norm2
+        removed = float(orthogonal @ residual) ** 2 / norm2
+        explained = removed / float(residual @ residual)
+        shifts = -along * change
+        moves = [fitted for fitted, shift, std in zip(fitter.names, shifts, total_std) if abs(shift) > std]
+        if explained > FIXED_EXPLAINS and removed > unexplained_model_error and moves:
+            effects.append(_FixedEffect(name, value, change, explained, shifts, moves))
+    return effects
+
+
+def _flipped_twist_warning(fitter: _Fitter, solution, max_evaluations: int) -> list[str]:
+    """The fit again with every twist negated: a warning if it is much better (the fit is not replaced)."""
+    cases = [ScanCase(-case.twist_deg, case.points) for case in fitter.cases]
+    flipped = _Fitter(fitter.problem, cases, fitter.names, fitter.poisson_ratio)
+    other = flipped.fit(max_evaluations)
+    if not other.cost < FLIPPED_BETTER * solution.cost:
+        return []
+    means = [d.mean for d in flipped.deviations(flipped.hose_at(other.x))]
+    first = [d.mean for d in fitter.deviations(fitter.hose_at(solution.x))]
+    values = ", ".join(f"{name} {fitter.value(name, x):.4g}" for name, x in zip(fitter.names, other.x))
+    twists = ", ".join(f"{case.twist_deg + 0.0:g}" for case in cases)  # + 0.0: no "-0"
+    return [f"the twists' sign looks flipped: with the twists negated the fit ends at mean deviations "
+            f"{', '.join(f'{m:.3g}' for m in means)} mm instead of {', '.join(f'{m:.3g}' for m in first)} mm "
+            f"({values}); check the sign convention (degrees about the end fitting's direction, right-handed) "
+            f"and use twist = {twists}"]
+
+
+def _limit_text(limit: Thresholds) -> str:
+    """'1 mm mean' or '1 mm mean, 3 mm largest'."""
+    return f"{limit.mean:g} mm mean" + ("" if limit.max is None else f", {limit.max:g} mm largest")
 
 
 def _relative_std(jacobian: np.ndarray, residuals: np.ndarray, observations: int) -> np.ndarray:

@@ -10,7 +10,9 @@
    poses (slerp of the rotations), with sub-steps, stability monitoring and branch
    switching; a loss of stability there is a snap-through, recorded with its jump.
 4. At every pose: bend radius, twisting moment and reactions, and the nearest approach to
-   every obstacle (exact, clearance.py).
+   every obstacle (exact, clearance.py).  Clips move with their bodies like the fittings
+   (point and frame), each clip's roll as found at assembly (fixed clips locked, rotating
+   and sliding clips free); their reactions, and the arc length of sliding clips, per pose.
 5. Optionally the same sweep with the end fitting free to spin (the common modelling error
    the seed paper warns about), and the separation of the two answers.
 """
@@ -23,13 +25,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from hoseline.mechanics.clipped_newton import clip_arc_lengths, clip_reactions, station_positions
 from hoseline.mechanics.newton import node_positions, solve_equilibrium
-from hoseline.mechanics.rod import Clamps, RodState
+from hoseline.mechanics.rod import Clamps, ClipHold, RodState
 from hoseline.mechanics.rotations import extrapolate_frames
 from hoseline.model.motion import Pose, interpolate
 from hoseline.model.mounts import Mount, single_plane_offset
 from hoseline.model.sweep import SweepProblem
-from hoseline.procedures.geometry.clearance import TriangleIndex
+from hoseline.procedures.geometry.clearance import TriangleIndex, nearest_with_fittings
 from hoseline.procedures.placement.continuation import ContinuationLog, Progress, StepControl, follow
 from hoseline.procedures.placement.hose_health import hose_health
 from hoseline.procedures.placement.sequence import rod_properties, solve, weight_vector
@@ -67,12 +70,22 @@ class _Tracker:
         self.start_frame = assembly.start_frame
         self.end_frame = assembly.end_frame
         self.log = ContinuationLog()
-        self.poses = (Pose(), Pose())
-        self.state = RodState(assembly.frames.copy(), assembly.end_force.copy(), 0.0)
+        self.bodies = (sweep.start_body, sweep.end_body) + tuple(sweep.clip_body(j) for j in range(len(assembly.clips)))
+        self.poses = tuple(Pose() for _ in self.bodies)
+        # the clips as held at assembly (the roll found included: a free roll starts from zero here)
+        self.clips = tuple(
+            ClipHold(int(np.argmin(np.abs(assembly.s - clip.arc_length))), clip.point, clip.frame,
+                     clip.kind in ("rotating", "sliding"), clip.kind == "sliding")
+            for clip in assembly.clips
+        )
+        count = len(self.clips)
+        self.state = RodState(assembly.frames.copy(), assembly.end_force.copy(), 0.0,
+                              np.array([clip.force for clip in assembly.clips]).reshape(count, 3), np.zeros(count),
+                              np.array([clip.arc_length for clip in assembly.clips]))
         self.before: RodState | None = None  # the equilibrium one pose back, for the secant predictor
 
-    def clamps(self, start: Pose, end: Pose) -> Clamps:
-        """The clamps with the start body at `start` and the end body at `end`."""
+    def clamps(self, start: Pose, end: Pose, *clip_poses: Pose) -> Clamps:
+        """The clamps with the start body at `start`, the end body at `end` and each clip's body at its pose."""
         problem = self.sweep.problem
         return Clamps(
             start_point=start.point(problem.start.point),
@@ -81,43 +94,49 @@ class _Tracker:
             end_frame=end.frame(self.end_frame),
             roll_free=self.roll_free,
             line_weight=self.weight,
+            clips=tuple(
+                ClipHold(clip.node, pose.point(clip.point), None if clip.frame is None else pose.frame(clip.frame),
+                         clip.roll_free, clip.sliding)
+                for clip, pose in zip(self.clips, clip_poses)
+            ),
         )
 
     def move_to(self, index: int) -> _Reached:
         """Reach the equilibrium at sweep pose `index` from the current one."""
         sweep = self.sweep
-        target = (sweep.pose(sweep.start_body, index), sweep.pose(sweep.end_body, index))
+        target = tuple(sweep.pose(body, index) for body in self.bodies)
         clamps = self.clamps(*target)
-        old_nodes = node_positions(self.props, clamps, self.state)
+        old_nodes = stations(self.props, clamps, self.state)
         limit = JUMP_FACTOR * self._mount_movement(target) + 1e-6 * self.props.length
         guess = self.state if self.before is None else _secant(self.before, self.state)
         trial, report = solve_equilibrium(self.props, clamps, guess)
         iterations = report.iterations
         events: list[str] = []
-        jump = _largest_movement(old_nodes, node_positions(self.props, clamps, trial)) if report.converged else math.inf
+        jump = _largest_movement(old_nodes, stations(self.props, clamps, trial)) if report.converged else math.inf
         if not (report.converged and report.unstable_directions == 0 and jump <= limit):
             start_poses = self.poses
 
             def path(t: float) -> Clamps:
-                return self.clamps(interpolate(start_poses[0], target[0], t), interpolate(start_poses[1], target[1], t))
+                return self.clamps(*(interpolate(old, new, t) for old, new in zip(start_poses, target)))
 
             control = PLAIN if not report.converged else CAREFUL
             logged, counted = len(self.log.events), self.log.iterations
             trial = follow(f"step to pose {index}", path, self.props, self.state, self.log, control=control)
             events = self.log.events[logged:]
             iterations += self.log.iterations - counted
-            jump = _largest_movement(old_nodes, node_positions(self.props, clamps, trial))
+            jump = _largest_movement(old_nodes, stations(self.props, clamps, trial))
             self.before = None  # a new branch or a sharp turn: no secant across it
         else:
             self.before = self.state
         self.state, self.poses = trial, target
         return _Reached(trial, clamps, iterations, events, jump)
 
-    def _mount_movement(self, target: tuple[Pose, Pose]) -> float:
-        """A bound (mm) of how far a station moves if the hose moved rigidly with either mount."""
+    def _mount_movement(self, target: tuple[Pose, ...]) -> float:
+        """A bound (mm) of how far a station moves if the hose moved rigidly with either mount (or a clip)."""
         problem = self.sweep.problem
         moves = []
-        for old, new, point in zip(self.poses, target, (problem.start.point, problem.end.point)):
+        points = (problem.start.point, problem.end.point) + tuple(clip.point for clip in self.clips)
+        for old, new, point in zip(self.poses, target, points):
             moves.append(float(np.linalg.norm(new.point(point) - old.point(point))) + self.props.length * old.angle_to(new))
         return max(moves)
 
@@ -128,7 +147,15 @@ def _secant(before: RodState, current: RodState) -> RodState:
         extrapolate_frames(before.frames, current.frames, 1.0),
         2.0 * current.end_force - before.end_force,
         2.0 * current.roll - before.roll,
+        2.0 * current.clip_forces - before.clip_forces,
+        2.0 * current.clip_rolls - before.clip_rolls,
+        2.0 * current.clip_arc_lengths - before.clip_arc_lengths,
     )
+
+
+def stations(props, clamps: Clamps, state: RodState) -> np.ndarray:
+    """Station positions (N+1, 3) mm; with clips at each segment's length (sliding clips stretch their spans)."""
+    return station_positions(props, clamps, state)[1] if clamps.clips else node_positions(props, clamps, state)
 
 
 def _largest_movement(a: np.ndarray, b: np.ndarray) -> float:
@@ -136,16 +163,17 @@ def _largest_movement(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.linalg.norm(a - b, axis=1)))
 
 
-def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None) -> SweepResult:
+def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None,
+              equilibria: list[tuple[Clamps, RodState]] | None = None) -> SweepResult:
     """Carry the hose of `sweep` through all its poses; measure clearance and health at each.
 
     progress: optional callable(phase, fraction) for a progress bar.
+    equilibria: if given, the (clamps, state) of every pose is appended to it, in pose order (the
+        SweepResult keeps no frames; the variation study's sensitivities differentiate these).
     Raises PlacementError (from the placement or the continuation) when a pose cannot be reached.
     """
     started = time.perf_counter()
     problem = sweep.problem
-    if problem.clips:  # the tracker below moves the two mounts only
-        raise ValueError("sweep: the problem has clips, which sweeps do not carry yet; remove them")
     assembly = solve(problem, progress=_prefixed(progress, "assembly"))
     count = sweep.pose_count
     n_nodes = problem.hose.segments + 1
@@ -153,6 +181,10 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None) -> Sweep
     indexes = [TriangleIndex(o.vertices, o.faces) for o in sweep.obstacles]
 
     centerlines = np.empty((count, n_nodes, 3))
+    stretched = np.empty((count, n_nodes))  # arc length of the stations (sliding clips move them)
+    n_clips = len(problem.clips)
+    clip_loads = np.empty((2, count, n_clips, 3))  # force N, moment N*mm of each clip on the hose
+    clip_arcs = np.empty((count, n_clips))
     mounts = np.empty((4, count, 3))  # start point, end point, start direction, end direction
     health = []
     iterations = np.zeros(count, dtype=int)
@@ -164,8 +196,14 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None) -> Sweep
         tick = time.perf_counter()
         reached = tracker.move_to(k)
         solve_time += time.perf_counter() - tick
-        nodes = node_positions(tracker.props, reached.clamps, reached.state)
+        if equilibria is not None:
+            equilibria.append((reached.clamps, reached.state))
+        nodes = stations(tracker.props, reached.clamps, reached.state)
         centerlines[k] = nodes
+        if n_clips:
+            stretched[k] = station_positions(tracker.props, reached.clamps, reached.state)[0]
+            clip_loads[:, k] = clip_reactions(tracker.props, reached.clamps, reached.state)
+            clip_arcs[k] = clip_arc_lengths(tracker.props, reached.clamps, reached.state)
         mounts[:, k] = _mount_geometry(reached.clamps)
         health.append(hose_health(tracker.props, reached.clamps, reached.state, problem.hose.outer_radius))
         iterations[k] = reached.iterations
@@ -174,8 +212,9 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None) -> Sweep
             if k > 0:  # the step from the design position to the first pose is not part of the sweep
                 snaps.append(Snap(k, reached.jump, reached.events))
         tick = time.perf_counter()
+        fittings = _fitting_lines(sweep, k)
         for obstacle, index, found in zip(sweep.obstacles, indexes, near):
-            found.append(_nearest(index, sweep.pose(obstacle.body, k), nodes, problem.hose.outer_radius))
+            found.append(_nearest(index, sweep.pose(obstacle.body, k), nodes, problem.hose.outer_radius, fittings))
         clearance_time += time.perf_counter() - tick
         if progress is not None:
             progress("sweep", (k + 1) / count)
@@ -222,6 +261,10 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None) -> Sweep
         solve_seconds=solve_time,
         clearance_seconds=clearance_time,
         wall_time=time.perf_counter() - started,
+        clip_forces=clip_loads[0],
+        clip_moments=clip_loads[1],
+        clip_arc_lengths=clip_arcs,
+        station_arc_lengths=stretched if any(clip.slides for clip in problem.clips) else None,
     )
 
 
@@ -238,17 +281,35 @@ def _free_roll_sweep(sweep: SweepProblem, assembly: Result, progress: Progress |
     shapes = np.empty((sweep.pose_count, problem.hose.segments + 1, 3))
     for k in range(sweep.pose_count):
         reached = tracker.move_to(k)
-        shapes[k] = node_positions(tracker.props, reached.clamps, reached.state)
+        shapes[k] = stations(tracker.props, reached.clamps, reached.state)
         if progress is not None:
             progress("sweep, end roll free", (k + 1) / sweep.pose_count)
     return shapes, tracker.log.events
 
 
-def _nearest(index: TriangleIndex, pose: Pose, nodes: np.ndarray, outer_radius: float):
-    """Nearest approach of the hose to an obstacle at `pose`: computed in the obstacle's own
-    coordinates (the hose moved by the inverse pose), answered in world coordinates."""
-    found = index.nearest(pose.inverse().points(nodes), outer_radius)
+def _nearest(index: TriangleIndex, pose: Pose, nodes: np.ndarray, outer_radius: float, fittings=(None, None)):
+    """Nearest approach of the hose (and its end fittings: (centreline, radius) or None each) to an obstacle
+    at `pose`: computed in the obstacle's own coordinates (the hose moved by the inverse pose), answered in
+    world coordinates."""
+    inverse = pose.inverse()
+    local = tuple(None if piece is None else (inverse.points(piece[0]), piece[1]) for piece in fittings)
+    found = nearest_with_fittings(index, inverse.points(nodes), outer_radius, local)
     return replace(found, on_hose=pose.point(found.on_hose), on_obstacle=pose.point(found.on_obstacle))
+
+
+def _fitting_lines(sweep: SweepProblem, index: int) -> tuple:
+    """(start, end): each end fitting's centreline (mm) moved with its mount's body at pose `index`, and its
+    outer radius (mm); None where the hose has no fitting."""
+    problem = sweep.problem
+    fittings = problem.fittings
+    if fittings is None:
+        return (None, None)
+    lines = []
+    for port, fitting, body in ((fittings.start_port, fittings.start, sweep.start_body),
+                                (fittings.end_port, fittings.end, sweep.end_body)):
+        lines.append(None if fitting is None else (sweep.pose(body, index).points(fitting.centreline(port)),
+                                                   fitting.radius(problem.hose.outer_diameter)))
+    return tuple(lines)
 
 
 def _mount_geometry(clamps: Clamps) -> np.ndarray:

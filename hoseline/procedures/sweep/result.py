@@ -75,6 +75,11 @@ class SweepResult:
     iterations: (M,) Newton iterations to reach each pose.
     solve_seconds, clearance_seconds, wall_time: s, time in the solver (sweep only, the free
         run included), in the clearance queries, and in total.
+    clip_forces, clip_moments: (M, c, 3) N and N*mm (about the clip point), each clip's load on the
+        hose at each pose (c = 0 without clips).  clip_arc_lengths: (M, c) mm, where each clip holds
+        the hose (it changes for a sliding clip).  station_arc_lengths: (M, N+1) mm, the arc length
+        of the stations at each pose where a sliding clip stretches the spans next to it, else None
+        (the stations are then at s).
     """
 
     sweep: SweepProblem
@@ -101,6 +106,10 @@ class SweepResult:
     solve_seconds: float = 0.0
     clearance_seconds: float = 0.0
     wall_time: float = 0.0
+    clip_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
+    clip_moments: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
+    clip_arc_lengths: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    station_arc_lengths: np.ndarray | None = None
 
     @property
     def pose_count(self) -> int:

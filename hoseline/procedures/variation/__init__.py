@@ -8,7 +8,8 @@ sweep) and reads it; nominal.py holds the nominal placement's equilibria and sta
 them (warm start); engine.py runs the samples in batches on Dask distributed; statistics.py turns
 samples into envelopes, probabilities with confidence intervals and variances; sensitivity.py
 differentiates the quantities with respect to every parameter at the nominal equilibrium
-(implicit function theorem with the exact Hessian) for the first-order variance;
+(implicit function theorem with the exact Hessian) for the first-order variance, and
+sweep_sensitivity.py the same at every pose of a sweep for its extremes over the poses;
 design_search.py judges and ranks hose lengths and clockings; study.py holds a study and reads
 its outcome off the samples; run.py runs a study from start to end.
 

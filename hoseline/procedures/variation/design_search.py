@@ -11,6 +11,24 @@ The ranking: the candidates that meet every limit, best first by the margin of `
 (default: the smallest clearance, else the bend radius), ties broken by the smaller |clocking|
 and then the shorter hose.  The grid of the margin of `rank_by` over length x clocking is the
 heat map of the report.
+
+With method "optimise" the grid is refined: lengths are discrete (catalogue steps) and stay so,
+the clocking is continuous.  For every length with a grid cell meeting every limit, the margin of
+`rank_by` is maximised over the clocking by Brent's bounded method (scipy.optimize.minimize_scalar,
+"bounded": golden sections with parabolic steps, no derivatives) within the bracket of its best
+such cell (from the clocking on its left to the one on its right, both grid points), to
+CLOCKING_TOLERANCE.  The refined clocking is kept only when it meets every limit and beats the
+grid cell; else the grid cell stands, and the table says which.  Why this and not a global
+optimiser over both (e.g. differential evolution with an integral length): the margin over the
+clocking is an extreme over the poses (a kink where the active pose changes) and can have several
+humps; the grid, which the heat map needs anyway, finds the hump, and the local search only
+polishes inside a bracket every point of which is between two candidates the grid judged, so
+the answer is never a point the grid did not vouch for the neighbourhood of; it is deterministic
+(the same numbers each run, as the samples are) and costs about a dozen solves per length, where
+an evolutionary search costs hundreds of whole sweeps and its answer depends on its seed.  A
+derivative-free method because the margin has kinks (the active pose, the 5th percentile over
+tolerance samples) where gradients mislead.  Each length is one task (on Dask when there is a
+cluster).
 """
 
 from __future__ import annotations
@@ -18,11 +36,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit
+from hoseline.procedures.variation.samples import StudyContext, evaluate_batch
 from hoseline.procedures.variation.tolerances import INDEX
 
 DESIGN_PERCENTILE = 5.0  # with tolerances, a limit is met when this percentile of its margin is not negative
+METHODS = ("grid", "optimise")
+CLOCKING_TOLERANCE = 0.01  # degrees: the optimiser's absolute tolerance on the clocking
+FAILED = 1e30  # the objective where a candidate cannot be built (finite, so Brent's parabolas stay defined)
 
 
 @dataclass(frozen=True)
@@ -34,31 +57,72 @@ class DesignGrid:
     clockings: tuple[float, ...]
     rank_by: str
     samples: int = 0
+    method: str = "grid"
 
     def __post_init__(self) -> None:
         if not self.lengths or not self.clockings:
             raise ValueError("a design search needs at least one length and one clocking")
+        if self.method not in METHODS:
+            raise ValueError(f"design method {self.method!r}: choose one of {', '.join(METHODS)}")
 
     def coordinates(self, nominal_length: float, nominal_twist: float, deviations: np.ndarray) -> np.ndarray:
         """(L * C * S, 15) the deviations of every candidate (lengths outermost, then clockings) and sample.
 
         deviations: (S, 15) tolerance deviations applied to every candidate (S = 1 row of zeros without).
         """
-        rows = []
-        for length in self.lengths:
-            for clocking in self.clockings:
-                offset = np.zeros(15)
-                offset[INDEX["hose.length"]] = length - nominal_length
-                offset[INDEX["end.twist"]] = clocking - nominal_twist
-                rows.append(deviations + offset)
-        return np.concatenate(rows)
+        return np.concatenate([candidate_rows(length - nominal_length, clocking - nominal_twist, deviations)
+                               for length in self.lengths for clocking in self.clockings])
+
+
+def candidate_rows(length_offset: float, clocking_offset: float, deviations: np.ndarray) -> np.ndarray:
+    """(S, 15) the deviations of one candidate: its length (mm) and clocking (deg) from the base's, plus each of
+    the tolerance deviations (S, 15)."""
+    offset = np.zeros(15)
+    offset[INDEX["hose.length"]] = length_offset
+    offset[INDEX["end.twist"]] = clocking_offset
+    return deviations + offset
+
+
+def candidate_margins(limits: tuple[Limit, ...], names: list[str], values: np.ndarray, failed: np.ndarray) -> np.ndarray:
+    """(..., limits) the judged margin of each limit of candidates whose samples have `values` (..., S, quantities)
+    and `failed` (..., S): the margin itself for one sample, its DESIGN_PERCENTILE over several; NaN where a
+    sample of the candidate failed (a candidate some of whose hoses cannot be built meets no limit)."""
+    margins = np.full(values.shape[:-2] + (len(limits),), np.nan)
+    for k, limit in enumerate(limits):
+        margin = limit.margin(values[..., names.index(limit.quantity.name)])
+        with np.errstate(all="ignore"):
+            judged = np.nanpercentile(margin, DESIGN_PERCENTILE, axis=-1) if margin.shape[-1] > 1 else margin[..., 0]
+        judged = np.where(failed.any(axis=-1), np.nan, judged)
+        margins[..., k] = judged
+    return margins
+
+
+def meets_every_limit(margins: np.ndarray) -> bool:
+    """Whether a candidate's margins (limits,) are all known and not negative."""
+    return bool(np.all(np.isfinite(margins)) and np.all(margins >= 0.0))
+
+
+@dataclass
+class Refined:
+    """The best clocking of one length by the optimiser: length (mm), clocking (deg), margins (limits,),
+    evaluations (candidates solved by the optimiser), optimised (False: the refined clocking did not meet every
+    limit or did not beat the grid cell, which stands), bracket (deg) searched."""
+
+    length: float
+    clocking: float
+    margins: np.ndarray
+    evaluations: int
+    optimised: bool
+    bracket: tuple[float, float]
 
 
 @dataclass
 class DesignOutcome:
     """The judged grid: margins (L, C, limits) mm or the quantity's unit (the 5th percentile with tolerances;
     NaN where the candidate failed), failed (L, C) how many of its samples failed, the reasons, and the ranking
-    (indexes (i, j) into lengths x clockings of the candidates meeting every limit, best first)."""
+    (indexes (i, j) into lengths x clockings of the candidates meeting every limit, best first).  With the
+    optimiser, refined: one per length that has a grid cell meeting every limit, ranked best first (the
+    table is then theirs)."""
 
     grid: DesignGrid
     limits: tuple[Limit, ...]
@@ -66,6 +130,7 @@ class DesignOutcome:
     failed: np.ndarray
     reasons: list[str]
     ranking: list[tuple[int, int]]
+    refined: list[Refined] | None = None
 
     @property
     def rank_index(self) -> int:
@@ -73,12 +138,20 @@ class DesignOutcome:
         return [limit.quantity.name for limit in self.limits].index(self.grid.rank_by)
 
     def table(self) -> list[dict]:
-        """The ranked candidates as rows: rank, length_mm, clocking_deg, and the margin of every limit."""
+        """The ranked candidates as rows: rank, length_mm, clocking_deg, and the margin of every limit (with the
+        optimiser: its candidates, one per length, and where each clocking comes from)."""
+        if self.refined is not None:
+            candidates = [(r.length, r.clocking, r.margins, "optimiser" if r.optimised else "grid") for r in self.refined]
+        else:
+            candidates = [(self.grid.lengths[i], self.grid.clockings[j], self.margins[i, j], None)
+                          for i, j in self.ranking]
         rows = []
-        for rank, (i, j) in enumerate(self.ranking, start=1):
-            row = {"rank": rank, "length_mm": self.grid.lengths[i], "clocking_deg": self.grid.clockings[j]}
+        for rank, (length, clocking, margins, source) in enumerate(candidates, start=1):
+            row = {"rank": rank, "length_mm": length, "clocking_deg": clocking}
             for k, limit in enumerate(self.limits):
-                row[f"margin {limit.quantity.name} [{limit.quantity.unit}]"] = float(self.margins[i, j, k])
+                row[f"margin {limit.quantity.name} [{limit.quantity.unit}]"] = float(margins[k])
+            if source is not None:
+                row["clocking from"] = source
             rows.append(row)
         return rows
 
@@ -96,18 +169,85 @@ def judge(grid: DesignGrid, limits: tuple[Limit, ...], names: list[str], samples
     """Judge the candidates from their samples (rows as grid.coordinates orders them)."""
     per = max(grid.samples, 1)
     shape = (len(grid.lengths), len(grid.clockings), per)
-    values = samples["values"].reshape(shape + (-1,))
     failed = samples["failed"].reshape(shape)
-    margins = np.full(shape[:2] + (len(limits),), np.nan)
-    for k, limit in enumerate(limits):
-        margin = limit.margin(values[..., names.index(limit.quantity.name)])
-        with np.errstate(all="ignore"):
-            judged = np.nanpercentile(margin, DESIGN_PERCENTILE, axis=2) if per > 1 else margin[..., 0]
-        judged[failed.any(axis=2)] = np.nan  # a candidate some of whose hoses cannot be built is not met
-        margins[..., k] = judged
+    margins = candidate_margins(limits, names, samples["values"].reshape(shape + (-1,)), failed)
     rank = [limit.quantity.name for limit in limits].index(grid.rank_by)
-    feasible = [(i, j) for i in range(shape[0]) for j in range(shape[1])
-                if np.all(np.isfinite(margins[i, j])) and np.all(margins[i, j] >= 0.0)]
+    feasible = [(i, j) for i in range(shape[0]) for j in range(shape[1]) if meets_every_limit(margins[i, j])]
     feasible.sort(key=lambda ij: (-margins[ij[0], ij[1], rank], abs(grid.clockings[ij[1]]), grid.lengths[ij[0]]))
     reasons = sorted({str(r) for r in samples["reason"][samples["failed"]]})
     return DesignOutcome(grid, limits, margins, failed.sum(axis=2), reasons, feasible)
+
+
+@dataclass(frozen=True)
+class RefineTask:
+    """What the optimiser needs for one length: length (mm), the bracket of clockings (deg) and the grid's best
+    clocking in it with its margins, the base's length (mm) and twist (deg), the tolerance deviations (S, 15)
+    judged per candidate, the limits, the quantities' names and the position of rank_by in the limits."""
+
+    length: float
+    bracket: tuple[float, float]
+    start: float
+    start_margins: np.ndarray
+    nominal_length: float
+    nominal_twist: float
+    deviations: np.ndarray
+    limits: tuple[Limit, ...]
+    names: tuple[str, ...]
+    rank: int
+
+
+def refine_tasks(outcome: DesignOutcome, names: list[str], nominal_length: float, nominal_twist: float,
+                 deviations: np.ndarray) -> list[RefineTask]:
+    """One task per length with a grid cell meeting every limit: its best cell's bracket."""
+    grid = outcome.grid
+    clockings = grid.clockings
+    tasks = []
+    for i, length in enumerate(grid.lengths):
+        cells = [j for ii, j in outcome.ranking if ii == i]  # ranked best first
+        if not cells:
+            continue
+        j = cells[0]
+        bracket = (clockings[max(j - 1, 0)], clockings[min(j + 1, len(clockings) - 1)])
+        tasks.append(RefineTask(length, bracket, clockings[j], outcome.margins[i, j], nominal_length, nominal_twist,
+                                deviations, outcome.limits, tuple(names), outcome.rank_index))
+    return tasks
+
+
+def refine_length(context: StudyContext, task: RefineTask) -> dict[str, np.ndarray]:
+    """Maximise the margin of rank_by over the clocking within the task's bracket for its length (a Dask task).
+
+    Returns arrays: clocking (1,) deg, margins (limits,), evaluations (1,), optimised (1,) bool (False: the grid's
+    clocking stands, the refined one meeting not every limit or not beating it).
+    """
+    seen: dict[float, np.ndarray] = {}
+
+    def margins(clocking: float) -> np.ndarray:
+        if clocking not in seen:
+            rows = candidate_rows(task.length - task.nominal_length, clocking - task.nominal_twist, task.deviations)
+            out = evaluate_batch(context, np.arange(len(rows)), rows)
+            seen[clocking] = candidate_margins(task.limits, list(task.names), out["values"], out["failed"])
+        return seen[clocking]
+
+    def objective(clocking: float) -> float:
+        margin = margins(float(clocking))[task.rank]
+        return -margin if np.isfinite(margin) else FAILED
+
+    low, high = task.bracket
+    best, found, optimised = task.start, task.start_margins, False
+    if high > low:
+        result = minimize_scalar(objective, bounds=(low, high), method="bounded", options={"xatol": CLOCKING_TOLERANCE})
+        clocking = float(result.x)
+        candidate = margins(clocking)
+        if meets_every_limit(candidate) and candidate[task.rank] > task.start_margins[task.rank]:
+            best, found, optimised = clocking, candidate, True
+    return {"clocking": np.array([best]), "margins": np.asarray(found, dtype=float),
+            "evaluations": np.array([len(seen)]), "optimised": np.array([optimised])}
+
+
+def ranked_refinements(tasks: list[RefineTask], results: list[dict[str, np.ndarray]]) -> list[Refined]:
+    """The optimiser's candidates (one per task, results in task order), best first as the grid ranks."""
+    refined = [Refined(t.length, float(r["clocking"][0]), r["margins"], int(r["evaluations"][0]),
+                       bool(r["optimised"][0]), t.bracket) for t, r in zip(tasks, results)]
+    rank = tasks[0].rank if tasks else 0
+    refined.sort(key=lambda c: (-c.margins[rank], abs(c.clocking), c.length))
+    return refined

@@ -149,10 +149,27 @@ class Engine:
             for k in todo:
                 on_batch(k, evaluate_batch(context, indices[slices[k]], coordinates[slices[k]]))
             return
-        shared = self.client.scatter(context, broadcast=True)
+        # hash=False: a key of its own, so that releasing an earlier stage's copy of an equal context cannot drop it
+        shared = self.client.scatter(context, broadcast=True, hash=False)
         futures = {}
         for k in todo:
             rows = slices[k]
             futures[self.client.submit(evaluate_batch, shared, indices[rows], coordinates[rows], pure=False)] = k
         for future, arrays in as_completed(futures, with_results=True):
             on_batch(futures[future], arrays)
+
+    def map(self, function: Callable, context, items: list, on_result: Callable[[int, object], None],
+            done: Collection[int] = ()) -> None:
+        """function(context, items[k]) for every k not in `done`, here or on the cluster (the context sent to every
+        worker once), handing each result to on_result(k, result) as it finishes."""
+        todo = [k for k in range(len(items)) if k not in done]
+        if not todo:
+            return
+        if self.client is None:
+            for k in todo:
+                on_result(k, function(context, items[k]))
+            return
+        shared = self.client.scatter(context, broadcast=True, hash=False)
+        futures = {self.client.submit(function, shared, items[k], pure=False): k for k in todo}
+        for future, result in as_completed(futures, with_results=True):
+            on_result(futures[future], result)

@@ -14,11 +14,12 @@ from typing import Protocol
 import numpy as np
 
 from hoseline.procedures.placement.continuation import PlacementError, Progress
-from hoseline.procedures.variation.design_search import judge
+from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
 from hoseline.procedures.variation.samples import StudyContext, nominal_context
 from hoseline.procedures.variation.sensitivity import placement_sensitivities
 from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
+from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities
 
 
 class BatchStore(Protocol):
@@ -46,7 +47,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
               progress: Progress | None = None) -> StudyOutcome:
     """Run `study` and return its outcome.
 
-    stores: stage name ("samples", "design") -> its BatchStore (default: in memory).  where: where the
+    stores: stage name ("samples", "design", "optimise") -> its BatchStore (default: in memory).  where: where the
     batches run.  progress: callable(phase, fraction).  Raises PlacementError when the nominal hose
     cannot be solved.
     """
@@ -56,14 +57,15 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     notes = []
     sensitivities = None
     if study.sensitivities and study.variation.tolerances:
-        if study.base.sweep is not None:
-            notes.append("sensitivities and first-order estimates are computed for placements only; this study "
-                         "varies a sweep, so only the Monte Carlo numbers are given")
-        else:
-            try:
+        try:
+            if study.base.sweep is not None:
+                sensitivities = sweep_sensitivities(study.base.sweep, study.variation.varied)
+            else:
                 sensitivities = placement_sensitivities(study.base.problem, study.variation.varied)
-            except (PlacementError, ValueError) as exc:
-                notes.append(f"no sensitivities: {exc}")
+        except (PlacementError, ValueError) as exc:
+            notes.append(f"no sensitivities: {exc}")
+        else:
+            notes.extend(sensitivities.kinks)
     coordinates = study.coordinates()
     timings = {}
     with Engine(where) as engine:
@@ -79,18 +81,27 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
             cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose
             design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
             timings["design"] = time.perf_counter() - tick
+        design = None
+        if design_samples is not None:
+            names = [q.name for q in study.quantities]
+            design_limits = tuple(limit for limit in study.limits if limit.quantity.name != "deviation")
+            design = judge(study.design, design_limits, names, design_samples)
+            if grid.method == "optimise":
+                tick = time.perf_counter()
+                tasks = refine_tasks(design, names, study.base.problem.hose.length, study.base.problem.end_twist_deg,
+                                     deviations)
+                design.refined = ranked_refinements(tasks, _refine(engine, cold, tasks, stores, progress))
+                timings["optimiser"] = time.perf_counter() - tick
     outcome = summarize(study, samples, nominal.values(nominal.centerlines), nominal.centerlines, sensitivities)
     outcome.notes[:0] = notes
-    if design_samples is not None:
-        names = [q.name for q in study.quantities]
-        design_limits = tuple(limit for limit in study.limits if limit.quantity.name != "deviation")
-        outcome.design = judge(study.design, design_limits, names, design_samples)
+    outcome.design = design
     outcome.run = {
         "where": where.describe(),
         "samples": len(coordinates),
         "samples per second": len(coordinates) / timings["samples"] if len(coordinates) and timings["samples"] else None,
         "seconds, samples": timings["samples"],
         "seconds, design search": timings.get("design"),
+        "seconds, design optimiser": timings.get("optimiser"),
         "seconds, whole study": time.perf_counter() - started,
     }
     return outcome
@@ -113,3 +124,22 @@ def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.nda
 
     engine.run(context, coordinates, batch_size, keep, done=set(batches))
     return merge_batches(batches)
+
+
+def _refine(engine: Engine, context: StudyContext, tasks: list[RefineTask], stores: Callable[[str], BatchStore],
+            progress: Progress | None) -> list[dict[str, np.ndarray]]:
+    """The optimiser's result of every task (one per length), kept in the "optimise" store like batches (so an
+    interrupted study does not search the finished lengths again)."""
+    if not tasks:
+        return []
+    store = stores("optimise")
+    results = store.finished()
+
+    def keep(k: int, arrays: dict[str, np.ndarray]) -> None:
+        store.save(k, arrays)
+        results[k] = arrays
+        if progress is not None:
+            progress("design optimiser", len(results) / len(tasks))
+
+    engine.map(refine_length, context, tasks, keep, done=set(results))
+    return [results[k] for k in range(len(tasks))]

@@ -48,6 +48,7 @@ class Sensitivities:
     names: the quantities differentiated (quantities() without the deviation).  values: (q,) at
     the nominal hose.  derivatives: (q, 15).  stations: (N+1, 3) mm, the nominal centreline;
     station_derivatives: (N+1, 3, 15) mm per unit.  Columns of coordinates no tolerance moves are zero.
+    kinks: notes on quantities whose derivative is one-sided (a sweep's extreme reached at two poses).
     """
 
     names: tuple[str, ...]
@@ -55,6 +56,7 @@ class Sensitivities:
     derivatives: np.ndarray
     stations: np.ndarray
     station_derivatives: np.ndarray
+    kinks: tuple[str, ...] = ()
 
     def first_order(self, variation: Variation) -> tuple[np.ndarray, np.ndarray]:
         """First-order (mean, variance) of every quantity under the tolerances: Q0 + g.E[c], g^T Cov(c) g."""
@@ -99,7 +101,6 @@ def placement_sensitivities(problem: Problem, varied: tuple[int, ...]) -> Sensit
     """
     nominal = nominal_placement(problem)
     props, final, state, free_state = nominal.props, nominal.final, nominal.state, nominal.free_state
-    roll = free_state.roll
     free_system = evaluate(props, PerturbedPlacement(problem, np.zeros(len(COORDINATES))).free(), free_state)
     final_system = evaluate(props, final, state)
     readings = placement_readings(problem, props, final, state)
@@ -108,12 +109,7 @@ def placement_sensitivities(problem: Problem, varied: tuple[int, ...]) -> Sensit
     station_derivatives = np.zeros(readings.centerlines[0].shape + (len(COORDINATES),))
     steps = step_sizes(problem)
     for j in varied:
-        eps = steps[j] * np.eye(len(COORDINATES))[j]
-        sides = (PerturbedPlacement(problem, eps), PerturbedPlacement(problem, -eps))
-        free = [evaluate(side.props, side.free(), free_state) for side in sides]
-        _, roll_step = _roll_tangent(free_system, free, steps[j])
-        rolls = (roll + steps[j] * roll_step, roll - steps[j] * roll_step)
-        finals = [side.final(r) for side, r in zip(sides, rolls)]
+        sides, finals = perturbed_finals(problem, free_system, free_state, j, steps[j])
         moved = [evaluate(side.props, clamps, state) for side, clamps in zip(sides, finals)]
         dx, dmu = _tangent(final_system, (moved[0].grad - moved[1].grad) / (2 * steps[j]),
                            (moved[0].constraint - moved[1].constraint) / (2 * steps[j]))
@@ -131,6 +127,18 @@ def placement_sensitivities(problem: Problem, varied: tuple[int, ...]) -> Sensit
         stations=readings.centerlines[0],
         station_derivatives=station_derivatives,
     )
+
+
+def perturbed_finals(problem: Problem, free_system, free_state, j: int, step: float):
+    """The hoses at coordinate j +- step (user units) and their final placement clamps, the lock angle moved
+    to first order: ((side +, side -), (clamps +, clamps -)).  free_system: the nominal roll-free equilibrium's
+    system (evaluate), free_state its state."""
+    eps = step * np.eye(len(COORDINATES))[j]
+    sides = (PerturbedPlacement(problem, eps), PerturbedPlacement(problem, -eps))
+    free = [evaluate(side.props, side.free(), free_state) for side in sides]
+    _, roll_step = _roll_tangent(free_system, free, step)
+    rolls = (free_state.roll + step * roll_step, free_state.roll - step * roll_step)
+    return sides, [side.final(r) for side, r in zip(sides, rolls)]
 
 
 def _roll_tangent(free_system, sides, step: float) -> tuple[np.ndarray, float]:

@@ -59,7 +59,7 @@ class Sampling:
 @dataclass(frozen=True)
 class Study:
     """A study: name, the base (placement or sweep), the tolerances, the sampling, the limits,
-    whether to compute the sensitivities (placements only), and an optional design search."""
+    whether to compute the sensitivities, and an optional design search."""
 
     name: str
     base: StudyBase

@@ -1,0 +1,379 @@
+"""Frictionless contact as a smooth barrier energy, with its exact gradient and Hessian (compiled).
+
+The hose surface is the tube of the outer radius r about its centreline, a chain of straight
+segments (a chain of capsules), as in procedures/geometry/clearance.py.  Contact pairs:
+- station-plane: a plane's half-space; the nearest point of a segment to a plane is an end,
+  so the stations give the exact distance of the chain;
+- segment-ball (a sphere obstacle), segment-segment (a cylinder obstacle, a capsule about its
+  axis), and segment-segment of the hose itself (self-contact, segments far enough apart
+  along the hose: see self_exclusion).
+The gap of a pair is its exact distance less the radii (r, plus the obstacle's radius, or 2r).
+
+Barrier (Li et al., Incremental Potential Contact, 2020):  b(d) = -(d - d_hat)^2 ln(d / d_hat)
+for 0 < d < d_hat, zero beyond: C2 at d_hat, infinite at d = 0.  Energy of a pair:
+kappa h b(gap), h the segment length, so kappa (N/mm^2) is a stiffness per length of hose.
+
+Exact derivatives of a distance.  A pair's closest points are r(z) = sum_j c_j(z) X_j over its
+points X_j (segment ends, obstacle points) with coefficients affine in the parameters z (the
+positions along the segments), f = |r|^2 minimised over z in [0, 1]^k.  With the set of
+parameters strictly inside (0, 1) fixed (it is, away from a switch between closest features),
+the envelope theorem and the implicit function theorem give
+    f_X = df/dX at z*,   f_XX = d2f/dX2 - f_Xz f_zz^-1 f_zX   (over the free parameters only),
+and d = sqrt(f).  No approximation; tests/test_contact_derivatives.py checks against finite
+differences.
+
+On the rotation group.  Stations are x_k = x_0 + h sum_{i<k} d3_i, so a frame rotation delta_i
+moves every station beyond segment i: dx_k/d delta_i = -h [d3_i]x for i < k.  With node
+gradients g_k and G_i = sum_{k>i} g_k (the contact force beyond segment i, negated), the
+gradient is h d3_i x G_i, the second-order change of the stations adds the block
+h (1/2 (G t^T + t G^T) - (G . t) I) (the segment-load term of energy.py), and the node Hessian
+adds h^2 [t_i]x^T C_ij [t_j]x with C_ij = sum_{k>i, l>j} H_kl (a dense coupling: every station
+in contact couples all segments before it).
+
+Written by hand (Numba): no library gives these distances with exact Hessians.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT = 0, 1, 2, 3
+PAIR_KINDS = ("station-plane", "segment-ball", "segment-capsule", "segment-segment")
+PARALLEL = 1e-12  # relative: segments closer to parallel than this keep their first end as the closest point
+
+
+@njit(cache=True)
+def barrier(d, d_hat):
+    """b(d), b'(d), b''(d) of b = -(d - d_hat)^2 ln(d / d_hat) for 0 < d < d_hat (mm^2, mm, 1); zero beyond."""
+    if d >= d_hat:
+        return 0.0, 0.0, 0.0
+    if d <= 0.0:
+        return math.inf, -math.inf, math.inf
+    x = d - d_hat
+    log = math.log(d / d_hat)
+    return -x * x * log, -2.0 * x * log - x * x / d, -2.0 * log - 4.0 * x / d + x * x / (d * d)
+
+
+@njit(cache=True)
+def _dot3(a, b):
+    # a . b for 3-vectors of any layout (row slices of the primitive tables)
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True)
+def _clamp01(value):
+    return min(max(value, 0.0), 1.0)
+
+
+@njit(cache=True)
+def segment_parameters(p1, q1, p2, q2):
+    """Parameters (s, t) in [0, 1] of the closest points p1 + s (q1 - p1), p2 + t (q2 - p2) of two segments.
+
+    Ericson, Real-Time Collision Detection (2005) 5.1.9, as procedures/geometry/proximity.py's
+    closest_points_of_segments, which returns the points; the contact terms need the parameters.
+    """
+    d1 = q1 - p1
+    d2 = q2 - p2
+    r = p1 - p2
+    a = _dot3(d1, d1)
+    e = _dot3(d2, d2)
+    f = _dot3(d2, r)
+    c = _dot3(d1, r)
+    b = _dot3(d1, d2)
+    denominator = a * e - b * b
+    s = _clamp01((b * f - c * e) / denominator) if denominator > PARALLEL * a * e else 0.0
+    t = (b * s + f) / e
+    if t < 0.0:
+        t = 0.0
+        s = _clamp01(-c / a)
+    elif t > 1.0:
+        t = 1.0
+        s = _clamp01((b - c) / a)
+    return s, t
+
+
+@njit(cache=True)
+def distance_terms(points, m, c, dc, free):
+    """Distance d = |sum_j c_j X_j| at the closest parameters, its gradient (3m,) and Hessian (3m, 3m) in the points.
+
+    points: (4, 3), the first m used.  c: (4,) coefficients at z*.  dc: (4, 2), dc[j, k] = dc_j/dz_k.
+    free: (2,) bool, the parameters strictly inside their range (the others stay on their bound).
+    """
+    n = 3 * m
+    r = np.zeros(3)
+    rz = np.zeros((3, 2))  # dr/dz_k
+    for j in range(m):
+        for x in range(3):
+            r[x] += c[j] * points[j, x]
+            for k in range(2):
+                rz[x, k] += dc[j, k] * points[j, x]
+    f = _dot3(r, r)
+    f_x = np.zeros(n)
+    f_xx = np.zeros((n, n))
+    for j in range(m):
+        for x in range(3):
+            f_x[3 * j + x] = 2.0 * c[j] * r[x]
+            for l in range(m):
+                f_xx[3 * j + x, 3 * l + x] = 2.0 * c[j] * c[l]
+    index = np.zeros(2, np.int64)
+    nf = 0
+    for k in range(2):
+        if free[k]:
+            index[nf] = k
+            nf += 1
+    if nf > 0:
+        f_zz = np.zeros((nf, nf))
+        f_xz = np.zeros((n, nf))
+        for a in range(nf):
+            ka = index[a]
+            for b in range(nf):
+                f_zz[a, b] = 2.0 * _dot3(rz[:, ka], rz[:, index[b]])
+            for j in range(m):
+                for x in range(3):
+                    f_xz[3 * j + x, a] = 2.0 * (dc[j, ka] * r[x] + c[j] * rz[x, ka])
+        if nf == 1:
+            inverse = np.array([[1.0 / f_zz[0, 0]]])
+        else:
+            det = f_zz[0, 0] * f_zz[1, 1] - f_zz[0, 1] * f_zz[1, 0]
+            inverse = np.array([[f_zz[1, 1], -f_zz[0, 1]], [-f_zz[1, 0], f_zz[0, 0]]]) / det
+        f_xx -= f_xz @ inverse @ f_xz.T
+    d = math.sqrt(f)
+    grad = f_x / (2.0 * d)
+    hess = f_xx / (2.0 * d) - np.outer(f_x, f_x) / (4.0 * d * d * d)
+    return d, grad, hess
+
+
+@njit(cache=True)
+def pair_geometry(kind, i, j, nodes, planes, balls, capsules):
+    """The points, coefficients and free parameters of pair (kind, hose primitive i, obstacle primitive j).
+
+    Returns (points (4, 3), m, c (4,), dc (4, 2), free (2,), node (4,) the station of each point or
+    -1 for an obstacle point, radius of the obstacle primitive (mm)); not for STATION_PLANE.
+    For SEGMENT_SEGMENT, j is the second hose segment.
+    """
+    points = np.zeros((4, 3))
+    c = np.zeros(4)
+    dc = np.zeros((4, 2))
+    free = np.zeros(2, np.bool_)
+    node = -np.ones(4, np.int64)
+    points[0] = nodes[i]
+    points[1] = nodes[i + 1]
+    node[0], node[1] = i, i + 1
+    p, q = nodes[i], nodes[i + 1]
+    if kind == SEGMENT_BALL:
+        centre = balls[j, :3]
+        e = q - p
+        s = _clamp01(_dot3(centre - p, e) / _dot3(e, e))
+        points[2] = centre
+        c[0], c[1], c[2] = 1.0 - s, s, -1.0
+        dc[0, 0], dc[1, 0] = -1.0, 1.0
+        free[0] = 0.0 < s < 1.0
+        return points, 3, c, dc, free, node, balls[j, 3]
+    if kind == SEGMENT_CAPSULE:
+        a, b = capsules[j, :3], capsules[j, 3:6]
+        radius = capsules[j, 6]
+    else:
+        a, b = nodes[j], nodes[j + 1]
+        node[2], node[3] = j, j + 1
+        radius = 0.0
+    s, t = segment_parameters(p, q, a, b)
+    points[2] = a
+    points[3] = b
+    c[0], c[1], c[2], c[3] = 1.0 - s, s, -(1.0 - t), -t
+    dc[0, 0], dc[1, 0], dc[2, 1], dc[3, 1] = -1.0, 1.0, 1.0, -1.0
+    free[0] = 0.0 < s < 1.0
+    free[1] = 0.0 < t < 1.0
+    return points, 4, c, dc, free, node, radius
+
+
+@njit(cache=True)
+def _pair_distance(kind, i, j, nodes, planes, balls, capsules):
+    # distance of one pair (mm; the obstacle primitive's radius not subtracted) and that radius
+    if kind == STATION_PLANE:
+        return _dot3(planes[j, 3:], nodes[i] - planes[j, :3]), 0.0
+    points, m, c, _, _, _, radius = pair_geometry(kind, i, j, nodes, planes, balls, capsules)
+    r = np.zeros(3)
+    for k in range(m):
+        r += c[k] * points[k]
+    return math.sqrt(_dot3(r, r)), radius
+
+
+@njit(cache=True)
+def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutoff):
+    """Every pair whose gap (mm, surface to surface) is below `cutoff` mm.
+
+    Returns (kinds, first (hose station or segment), second (obstacle primitive or second
+    segment), gaps), arrays of one entry per pair.  self_exclusion: segments i < j pair up when
+    j - i > self_exclusion; negative: no self-contact.
+    """
+    n_seg = nodes.shape[0] - 1
+    capacity = n_seg * (planes.shape[0] + balls.shape[0] + capsules.shape[0]) + (n_seg * n_seg if self_exclusion >= 0 else 0)
+    kinds = np.empty(capacity, np.int64)
+    first = np.empty(capacity, np.int64)
+    second = np.empty(capacity, np.int64)
+    gaps = np.empty(capacity)
+    count = 0
+    for k in range(1, n_seg + 1):
+        for j in range(planes.shape[0]):
+            d, _ = _pair_distance(STATION_PLANE, k, j, nodes, planes, balls, capsules)
+            if d - hose_radius < cutoff:
+                kinds[count], first[count], second[count], gaps[count] = STATION_PLANE, k, j, d - hose_radius
+                count += 1
+    for i in range(n_seg):
+        for j in range(balls.shape[0]):
+            d, radius = _pair_distance(SEGMENT_BALL, i, j, nodes, planes, balls, capsules)
+            if d - hose_radius - radius < cutoff:
+                kinds[count], first[count], second[count], gaps[count] = SEGMENT_BALL, i, j, d - hose_radius - radius
+                count += 1
+        for j in range(capsules.shape[0]):
+            d, radius = _pair_distance(SEGMENT_CAPSULE, i, j, nodes, planes, balls, capsules)
+            if d - hose_radius - radius < cutoff:
+                kinds[count], first[count], second[count], gaps[count] = SEGMENT_CAPSULE, i, j, d - hose_radius - radius
+                count += 1
+        if self_exclusion >= 0:
+            for j in range(i + self_exclusion + 1, n_seg):
+                d, _ = _pair_distance(SEGMENT_SEGMENT, i, j, nodes, planes, balls, capsules)
+                if d - 2.0 * hose_radius < cutoff:
+                    kinds[count], first[count], second[count], gaps[count] = SEGMENT_SEGMENT, i, j, d - 2.0 * hose_radius
+                    count += 1
+    return kinds[:count].copy(), first[:count].copy(), second[:count].copy(), gaps[:count].copy()
+
+
+@njit(cache=True)
+def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, kinds, first, second):
+    """Barrier energy of the given pairs (N*mm), its gradient (N+1, 3) and Hessian (N+1, N+1, 3, 3) in the stations.
+
+    weight: kappa h, N/mm (energy per mm^2 of barrier).  Also per pair: the force on the hose
+    (N; for a self-contact pair, on the first segment), the closest points on the hose and on the
+    other body (mm) and the gap (mm).
+    """
+    count = nodes.shape[0]
+    grad = np.zeros((count, 3))
+    hess = np.zeros((count, count, 3, 3))
+    forces = np.zeros((kinds.shape[0], 3))
+    on_hose = np.zeros((kinds.shape[0], 3))
+    on_other = np.zeros((kinds.shape[0], 3))
+    gaps = np.zeros(kinds.shape[0])
+    energy = 0.0
+    for p in range(kinds.shape[0]):
+        kind, i, j = kinds[p], first[p], second[p]
+        if kind == STATION_PLANE:
+            normal = planes[j, 3:]
+            gap = _dot3(normal, nodes[i] - planes[j, :3]) - hose_radius
+            b, b1, b2 = barrier(gap, d_hat)
+            energy += weight * b
+            for x in range(3):
+                grad[i, x] += weight * b1 * normal[x]
+                forces[p, x] = -weight * b1 * normal[x]
+                for y in range(3):
+                    hess[i, i, x, y] += weight * b2 * normal[x] * normal[y]
+            on_hose[p] = nodes[i]
+            on_other[p] = nodes[i] - (gap + hose_radius) * normal
+            gaps[p] = gap
+            continue
+        points, m, c, dc, free, node, radius = pair_geometry(kind, i, j, nodes, planes, balls, capsules)
+        d, d_x, d_xx = distance_terms(points, m, c, dc, free)
+        other_radius = hose_radius if kind == SEGMENT_SEGMENT else radius
+        gap = d - hose_radius - other_radius
+        b, b1, b2 = barrier(gap, d_hat)
+        energy += weight * b
+        for a in range(m):
+            ka = node[a]
+            if ka < 0:
+                continue
+            for x in range(3):
+                grad[ka, x] += weight * b1 * d_x[3 * a + x]
+                if a < 2:
+                    forces[p, x] -= weight * b1 * d_x[3 * a + x]
+            for bb in range(m):
+                kb = node[bb]
+                if kb < 0:
+                    continue
+                for x in range(3):
+                    for y in range(3):
+                        hess[ka, kb, x, y] += weight * (
+                            b2 * d_x[3 * a + x] * d_x[3 * bb + y] + b1 * d_xx[3 * a + x, 3 * bb + y]
+                        )
+        hose_point = c[0] * points[0] + c[1] * points[1]
+        axis_point = -(c[2] * points[2] + c[3] * points[3])  # on the other body's axis (or centre)
+        on_hose[p] = hose_point
+        on_other[p] = axis_point + other_radius / d * (hose_point - axis_point)
+        gaps[p] = gap
+    return energy, grad, hess, forces, on_hose, on_other, gaps
+
+
+@njit(cache=True)
+def rotation_terms(frames, h, node_grad, node_hess):
+    """Gradient (3N,) and dense Hessian (3N, 3N) in the segment rotations of an energy of the stations.
+
+    node_grad: (N+1, 3), node_hess: (N+1, N+1, 3, 3) in the stations x_0..x_N (x_0 is held).
+    See the module doc for the chain rule through x_k = x_0 + h sum_{i<k} d3_i.
+    """
+    n = frames.shape[0]
+    grad = np.zeros(3 * n)
+    hess = np.zeros((3 * n, 3 * n))
+    beyond = np.zeros(3)
+    last = 0  # the last station with a Hessian entry: no segment beyond it is coupled
+    for k in range(n + 1):
+        for l in range(n + 1):
+            for x in range(3):
+                for y in range(3):
+                    if node_hess[k, l, x, y] != 0.0:
+                        last = max(last, k)
+    for i in range(n - 1, -1, -1):
+        beyond += node_grad[i + 1]
+        t = frames[i, 2]
+        grad[3 * i] = h * (t[1] * beyond[2] - t[2] * beyond[1])
+        grad[3 * i + 1] = h * (t[2] * beyond[0] - t[0] * beyond[2])
+        grad[3 * i + 2] = h * (t[0] * beyond[1] - t[1] * beyond[0])
+        along = _dot3(beyond, t)
+        for x in range(3):
+            for y in range(3):
+                hess[3 * i + x, 3 * i + y] += h * (0.5 * (beyond[x] * t[y] + t[x] * beyond[y]) - (along if x == y else 0.0))
+    if last == 0:
+        return grad, hess
+    # C_ij = sum_{k>i, l>j} H_kl: suffix sums over l, then over k
+    rows = np.zeros((last + 1, last + 1, 3, 3))  # rows[k, j] = sum_{l>j} H_kl (zero for j = last)
+    for k in range(1, last + 1):
+        for j in range(last - 1, -1, -1):
+            rows[k, j] = node_hess[k, j + 1] + rows[k, j + 1]
+    suffix = np.zeros((last, 3, 3))
+    skew_i = np.zeros((3, 3))
+    skew_j = np.zeros((3, 3))
+    half = np.zeros((3, 3))
+    for i in range(last - 1, -1, -1):
+        for j in range(last):
+            suffix[j] += rows[i + 1, j]  # now suffix[j] = C_ij
+        _skew_into(frames[i, 2], skew_i)
+        for j in range(last):
+            _skew_into(frames[j, 2], skew_j)
+            for x in range(3):  # half = C_ij [t_j]x, then -h^2 [t_i]x half = h^2 [t_i]x^T C_ij [t_j]x
+                for y in range(3):
+                    half[x, y] = suffix[j, x, 0] * skew_j[0, y] + suffix[j, x, 1] * skew_j[1, y] + suffix[j, x, 2] * skew_j[2, y]
+            for x in range(3):
+                for y in range(3):
+                    hess[3 * i + x, 3 * j + y] -= (h * h) * (
+                        skew_i[x, 0] * half[0, y] + skew_i[x, 1] * half[1, y] + skew_i[x, 2] * half[2, y]
+                    )
+    return grad, hess
+
+
+@njit(cache=True)
+def _skew_into(t, out):
+    # [t]x: the matrix of v -> t x v
+    out[0, 0], out[0, 1], out[0, 2] = 0.0, -t[2], t[1]
+    out[1, 0], out[1, 1], out[1, 2] = t[2], 0.0, -t[0]
+    out[2, 0], out[2, 1], out[2, 2] = -t[1], t[0], 0.0
+
+
+@njit(cache=True)
+def listed_gaps(nodes, hose_radius, planes, balls, capsules, kinds, first, second):
+    """The gap (mm, surface to surface) of each listed pair (as returned by pair_gaps)."""
+    gaps = np.empty(kinds.shape[0])
+    for p in range(kinds.shape[0]):
+        d, radius = _pair_distance(kinds[p], first[p], second[p], nodes, planes, balls, capsules)
+        gaps[p] = d - hose_radius - (hose_radius if kinds[p] == SEGMENT_SEGMENT else radius)
+    return gaps

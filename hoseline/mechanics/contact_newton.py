@@ -1,0 +1,304 @@
+"""Newton's method for the rod with frictionless contact: the rod's Lagrangian plus the barrier energy.
+
+The rod's terms come from newton.evaluate (clips included: clipped_newton through it), the
+contact terms from contact.py.  The contact Hessian couples every segment before a station in
+contact (contact.py), so the system is solved dense: the KKT matrix [[H, J^T], [J, 0]] is
+factored by LAPACK's symmetric indefinite LDL^T (sytrf), which also gives its inertia, so the
+number of unstable directions on the constraint tangent space is neg(KKT) - m, as in
+banded.py.  A hundred segments make a 303 x 303 matrix: a millisecond or two per iteration.
+
+Step filter (StepFilter).  No step may cross into an obstacle or the hose itself: a rotation
+delta_i moves every station beyond segment i by at most h |delta_i| (a rotation by an angle moves
+a unit vector by less than the angle), which bounds how far each pair can approach along the
+step.  The step is cut so that no primitive can pass through the body it faces (its diameter;
+a plane is infinitely thick), and a trial state is accepted only if every gap it could have
+closed stays above a tenth of its value: a primitive cannot cross a body without ending inside
+it or passing through it, so no accepted step crosses into penetration.  Then the step is
+halved until the residual falls (the tracking Newton of newton.py).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg.lapack as lapack
+from threadpoolctl import threadpool_limits
+
+from hoseline.mechanics.banded import NEUTRAL
+from hoseline.mechanics.clipped import unknown_layout
+from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
+from hoseline.mechanics.contact import (
+    PAIR_KINDS,
+    SEGMENT_BALL,
+    SEGMENT_CAPSULE,
+    SEGMENT_SEGMENT,
+    STATION_PLANE,
+    listed_gaps,
+    node_terms,
+    pair_gaps,
+    rotation_terms,
+)
+from hoseline.mechanics.newton import NewtonReport, RodProperties, apply_step, evaluate
+from hoseline.mechanics.rod import Clamps, RodState, centerline
+
+SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
+
+
+@dataclass(frozen=True)
+class ContactModel:
+    """What the hose may touch, packed for the kernels (internal units: mm, N).
+
+    hose_radius: outer radius, mm.  activation: barrier distance d_hat, mm (pairs closer than it
+    push).  stiffness: barrier stiffness kappa, N/mm^2 (see docs/model.md, Contact).
+    planes (P, 6): point, unit normal.  balls (S, 4): centre, radius.  capsules (C, 7): axis
+    start, axis end, radius.  owners_*: index into `names` of each primitive's obstacle.
+    self_exclusion: segments i < j can touch when j - i > self_exclusion; -1: no self-contact.
+    """
+
+    hose_radius: float
+    activation: float
+    stiffness: float
+    planes: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    balls: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+    capsules: np.ndarray = field(default_factory=lambda: np.zeros((0, 7)))
+    owners_planes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    owners_balls: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    owners_capsules: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    names: tuple[str, ...] = ()
+    self_exclusion: int = -1
+
+    def pairs(self, nodes: np.ndarray, cutoff: float):
+        """(kinds, first, second, gaps) of every pair with a gap below `cutoff` mm (contact.pair_gaps)."""
+        return pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, self.self_exclusion, cutoff)
+
+    def owner(self, kind: int, second: int) -> str:
+        """Name of the obstacle of a pair ("self" for self-contact)."""
+        if kind == SEGMENT_SEGMENT:
+            return "self"
+        owners = (self.owners_planes, self.owners_balls, self.owners_capsules)[kind]
+        return self.names[int(owners[second])]
+
+
+def self_exclusion(hose_radius: float, segment_length: float) -> int:
+    """Segments i < j may touch when j - i exceeds this: their arc-length gap (j - i - 1) h is at
+    least pi r, the tightest U-turn of two touching passes (a straight hose has them 2r + apart)."""
+    return int(math.ceil(math.pi * hose_radius / segment_length))
+
+
+@dataclass
+class ContactSystem:
+    """The rod's Lagrangian with contact at one state: dense Hessian, constraint, residual, active pairs."""
+
+    energy: float
+    grad: np.ndarray
+    hess: np.ndarray
+    jac_t: np.ndarray
+    constraint: np.ndarray
+    residual: float
+    pairs: tuple  # (kinds, first, second) of the active pairs (gap < activation)
+    forces: np.ndarray  # (pairs, 3) N on the hose
+    on_hose: np.ndarray
+    on_other: np.ndarray
+    gaps: np.ndarray
+
+
+def rotation_index(props: RodProperties, clamps: Clamps, state: RodState) -> np.ndarray:
+    """Index of each segment's first rotation unknown (N,) in the system of newton.evaluate."""
+    if not clamps.clips:
+        return 3 * np.arange(props.segments)
+    nodes, _, _, _, roll_free = clip_arrays(clamps, state)
+    return unknown_layout(props.segments, nodes, roll_free, clamps.roll_free)[0]
+
+
+def _dense(band: np.ndarray) -> np.ndarray:
+    n, width = band.shape
+    out = np.zeros((n, n))
+    for k in range(width):
+        rows = np.arange(k, n)
+        out[rows, rows - k] = band[k:, k]
+        out[rows - k, rows] = band[k:, k]
+    return out
+
+
+def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> ContactSystem:
+    """Assemble the Lagrangian with the barrier energy at a state (internal units)."""
+    base = evaluate(props, clamps, state)
+    h = props.segment_length
+    nodes = centerline(state.frames, clamps.start_point, h)
+    kinds, first, second, _ = model.pairs(nodes, model.activation)
+    weight = model.stiffness * h
+    energy, node_grad, node_hess, forces, on_hose, on_other, gaps = node_terms(
+        nodes, model.hose_radius, weight, model.activation, model.planes, model.balls, model.capsules, kinds, first, second
+    )
+    grad = base.grad.copy()
+    hess = _dense(base.band)
+    if kinds.size:
+        c_grad, c_hess = rotation_terms(state.frames, h, node_grad, node_hess)
+        index = (rotation_index(props, clamps, state)[:, None] + np.arange(3)[None, :]).reshape(-1)
+        grad[index] += c_grad
+        hess[np.ix_(index, index)] += c_hess
+    end_forces = np.linalg.norm(state.end_force) + np.linalg.norm(clip_forces(clamps, state))
+    contact_total = float(np.sum(np.linalg.norm(forces, axis=1))) if kinds.size else 0.0
+    weight_total = float(np.linalg.norm(clamps.line_weight)) * props.length
+    scale = props.largest_stiffness / props.length + (end_forces + weight_total + contact_total) * props.length
+    residual = max(float(np.max(np.abs(grad))) / scale, float(np.max(np.abs(base.constraint))) / props.length)
+    return ContactSystem(base.energy + energy, grad, hess, base.jac_t, base.constraint, residual, (kinds, first, second),
+                         forces, on_hose, on_other, gaps)
+
+
+def _kkt_step(system: ContactSystem) -> tuple[np.ndarray, np.ndarray, int]:
+    """(step, multiplier step, unstable directions on the constraint tangent space) of the dense KKT system."""
+    n, m = system.jac_t.shape
+    kkt = np.zeros((n + m, n + m))
+    kkt[:n, :n] = system.hess
+    kkt[:n, n:] = system.jac_t
+    kkt[n:, :n] = system.jac_t.T
+    factor, pivots, info = lapack.dsytrf(kkt, lower=1)
+    if info < 0:
+        raise ValueError(f"LAPACK dsytrf: argument {-info} is invalid")
+    rhs = np.concatenate([-system.grad, -system.constraint])
+    solution, info = lapack.dsytrs(factor, pivots, rhs, lower=1)
+    if info != 0 or not np.all(np.isfinite(solution)):
+        return np.full(n, np.nan), np.full(m, np.nan), -1
+    return solution[:n], -solution[n:], _negative_pivots(factor, pivots) - m
+
+
+def _negative_pivots(factor: np.ndarray, pivots: np.ndarray) -> int:
+    """Negative eigenvalues of the factored matrix: those of D's 1x1 and 2x2 blocks (Sylvester's law)."""
+    values = []
+    k = 0
+    size = factor.shape[0]
+    while k < size:
+        if pivots[k] > 0:
+            values.append(factor[k, k])
+            k += 1
+        else:
+            block = np.array([[factor[k, k], factor[k + 1, k]], [factor[k + 1, k], factor[k + 1, k + 1]]])
+            values.extend(np.linalg.eigvalsh(block))
+            k += 2
+    values = np.array(values)
+    return int(np.sum(values < -NEUTRAL * np.max(np.abs(values))))
+
+
+@dataclass
+class StepFilter:
+    """The pairs a step could bring into contact, their gaps (mm) now, and the largest fraction of the step.
+
+    A rotation delta_i moves every station beyond segment i by at most h |delta_i| per unit of the
+    step, so a pair further apart than that (plus d_hat) cannot be reached and is not watched.
+    limit: no primitive can pass through the body it faces: the fraction of the step is kept below
+    (gap + thickness) / move bound, the thickness being the other body's diameter (infinite for a
+    plane).  A trial state is accepted only if every watched gap stays above SAFE_FRACTION of its
+    value (`admits`); as a primitive cannot cross a body without ending inside it or passing
+    through it, no accepted step crosses into penetration.
+    """
+
+    pairs: tuple
+    gaps: np.ndarray
+    limit: float
+
+    def admits(self, props: RodProperties, clamps: Clamps, trial: RodState, model: ContactModel) -> bool:
+        """Whether the trial state keeps every watched gap above SAFE_FRACTION of its value."""
+        if self.gaps.size == 0:
+            return True
+        nodes = centerline(trial.frames, clamps.start_point, props.segment_length)
+        kinds, first, second = self.pairs
+        gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, kinds, first, second)
+        return bool(np.all(gaps > SAFE_FRACTION * self.gaps))
+
+
+def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, model: ContactModel) -> StepFilter:
+    """The StepFilter of `step` from `state` (see StepFilter)."""
+    h = props.segment_length
+    index = rotation_index(props, clamps, state)
+    rotations = step[index[:, None] + np.arange(3)[None, :]]
+    reach = np.concatenate([[0.0], h * np.cumsum(np.linalg.norm(rotations, axis=1))])  # bound of station k's move
+    nodes = centerline(state.frames, clamps.start_point, h)
+    kinds, first, second, gaps = model.pairs(nodes, float(reach[-1]) + model.activation)
+    if kinds.size == 0:
+        return StepFilter((kinds, first, second), gaps, 1.0)
+    last = props.segments
+    bound = np.where(kinds == STATION_PLANE, reach[first], reach[np.minimum(first + 1, last)])
+    bound = bound + np.where(kinds == SEGMENT_SEGMENT, reach[np.minimum(second + 1, last)], 0.0)
+    thickness = np.full(kinds.size, np.inf)
+    thickness[kinds == SEGMENT_SEGMENT] = 2.0 * model.hose_radius
+    balls, capsules = kinds == SEGMENT_BALL, kinds == SEGMENT_CAPSULE
+    thickness[balls] = 2.0 * model.balls[second[balls], 3]
+    thickness[capsules] = 2.0 * model.capsules[second[capsules], 6]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        fractions = np.where(bound > 0.0, (gaps + thickness) / bound, np.inf)
+    return StepFilter((kinds, first, second), gaps, float(min(1.0, np.min(fractions))))
+
+
+def solve_with_contact(
+    props: RodProperties,
+    clamps: Clamps,
+    state: RodState,
+    model: ContactModel,
+    *,
+    tolerance: float = 1e-10,
+    max_iterations: int = 60,
+) -> tuple[RodState, NewtonReport]:
+    """Newton iterations from `state` (which must not penetrate) to an equilibrium with contact.
+
+    Returns the final state and a report as newton.solve_equilibrium does; the state is only
+    meaningful when report.converged.  tolerance: relative residual of force and moment balance.
+    One BLAS thread: the dense systems are small, and threads only contend for the cores (10x
+    slower on a loaded two-core machine).
+    """
+    with threadpool_limits(1):
+        return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations)
+
+
+def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
+    """solve_with_contact without the thread limit."""
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    kinds, first, second, gaps = model.pairs(nodes, 0.0)
+    if kinds.size:
+        worst = int(np.argmin(gaps))
+        return state, NewtonReport(False, 0, math.inf, -1, penetration_message(model, kinds[worst], first[worst],
+                                                                                second[worst], gaps[worst]))
+    system = evaluate_contact(props, clamps, state, model)
+    unstable = -1
+    for iteration in range(max_iterations + 1):
+        if not np.isfinite(system.residual):
+            return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
+        step, force_step, unstable = _kkt_step(system)
+        if system.residual <= tolerance:
+            return state, NewtonReport(True, iteration, system.residual, unstable)
+        if iteration == max_iterations or not np.all(np.isfinite(step)):
+            break
+        watch = step_filter(props, clamps, state, step, model)
+        alpha = watch.limit
+        accepted = None
+        for _ in range(30):
+            trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
+            if not watch.admits(props, clamps, trial, model):
+                alpha *= 0.5
+                continue
+            trial_system = evaluate_contact(props, clamps, trial, model)
+            if trial_system.residual < (1.0 - 1e-4 * alpha) * system.residual or trial_system.residual <= tolerance:
+                accepted = trial, trial_system
+                break
+            alpha *= 0.5
+        if accepted is None:
+            return state, NewtonReport(False, iteration + 1, system.residual, unstable, "no acceptable step found")
+        state, system = accepted
+    return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
+
+
+def penetration_message(model: ContactModel, kind: int, first: int, second: int, gap: float) -> str:
+    """Which obstacle the hose is inside, where (station or segment) and by how much."""
+    where = f"station {first}" if kind == STATION_PLANE else f"segment {first}"
+    if kind == SEGMENT_SEGMENT:
+        return f"the hose cuts into itself: segments {first} and {second} overlap by {-gap:.4g} mm"
+    return f"the hose is inside obstacle {model.owner(kind, second)!r} at {where} by {-gap:.4g} mm ({PAIR_KINDS[kind]})"
+
+
+def minimum_gap(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:
+    """The smallest gap (mm, surface to surface) over every pair: the hose's clearance to all it may touch."""
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    _, _, _, gaps = model.pairs(nodes, math.inf)
+    return float(np.min(gaps)) if gaps.size else math.inf
