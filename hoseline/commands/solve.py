@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import typer
 from rich.console import Console
 
@@ -53,6 +54,7 @@ def solve_command(
         Console().print(summary_table([result], [problem.name]))
         if problem.fittings is not None:
             print_lengths(problem)
+        print_contacts(result)
         Console().print(f"wrote {out / 'centerline.csv'} and {out / 'result.json'}")
         print_exports(out, exported)
 
@@ -83,6 +85,15 @@ def print_lengths(problem) -> None:
     parts = " + ".join(f"{fitting.length_allowance:.2f} ({name})" for name, _, fitting in fittings.pieces())
     Console().print(f"free length {problem.hose.length:.2f} mm, overall length "
                     f"{fittings.overall_length(problem.hose.length):.2f} mm (the fittings add {parts} mm)")
+
+
+def print_contacts(result) -> None:
+    """One line per obstacle of a placement with contact: length in contact (mm), total force (N), smallest gap (mm)."""
+    for contact in result.contacts:
+        what = "itself" if contact.name == "self" else f"{contact.name!r} ({contact.kind})"
+        Console().print(f"contact with {what}: {contact.length_in_contact:.1f} mm of hose at {contact.gap.size} "
+                        f"point(s), force {float(np.linalg.norm(contact.total_force)):.4g} N, smallest gap "
+                        f"{contact.min_gap:.3g} mm")
 
 
 def print_exports(folder: Path, files) -> None:

@@ -82,6 +82,29 @@ either length (the free, cut length) or overall_length (the catalogue's, fitting
     reference = [0.0, 0.0, 1.0]      # the elbow bends towards this at clocking 0
     clocking = 30.0                  # degrees about the port direction, optional
     outer_diameter = 14.0            # mm, optional (default: the hose's)
+
+Contact (model/obstacles.py, docs/model.md "Contact"): analytic obstacles the hose touches without
+entering (frictionless), and the hose kept out of itself::
+
+    [contact]
+    self = true                      # optional, default false
+    [[contact.obstacles]]
+    kind = "plane"                   # the hose stays on the side normal points to
+    point = [0.0, 0.0, -40.0]        # mm
+    normal = [0.0, 0.0, 1.0]
+    name = "floor"                   # optional, default the kind (numbered when repeated)
+    [[contact.obstacles]]
+    kind = "sphere"
+    center = [0.0, 50.0, 0.0]        # mm
+    radius = 20.0                    # mm
+    [[contact.obstacles]]
+    kind = "cylinder"                # a capsule: rounded ends
+    start = [0.0, 0.0, 0.0]          # mm, the axis from start to end
+    end = [0.0, 100.0, 0.0]
+    radius = 15.0                    # mm
+
+These are not the [[obstacles]] of a sweep file (meshes the sweep measures clearance to, without
+contact); a sweep file with [contact] is refused until sweeps take contact.
 """
 
 from __future__ import annotations
@@ -110,6 +133,7 @@ from hoseline.model import limits
 from hoseline.model.clips import Clip
 from hoseline.model.fittings import EndFittings, Fitting
 from hoseline.model.mounts import Mount
+from hoseline.model.obstacles import Cylinder, Obstacle, Plane, Sphere
 from hoseline.model.problem import Problem, reaches
 from hoseline.model.preset import Preset
 from hoseline.model.stiffeners import PRESETS, SPRING_COUNTS, SpringTable, Stiffeners, thesis_preset
@@ -157,6 +181,13 @@ _UNITS = {
     "reference": "direction the elbow bends towards at clocking 0",
     "fittings.length": "mm, straight: port to hose; elbow: port to vertex",
     "fittings.outer_diameter": "mm, of the fitting",
+    "self": "keep the hose out of itself",
+    "kind": "plane, sphere or cylinder",
+    "normal": "towards the side the hose stays on",
+    "center": "mm",
+    "radius": "mm",
+    "obstacles.start": "mm, one end of the axis",
+    "obstacles.end": "mm, the other end of the axis",
 }
 
 
@@ -490,6 +521,29 @@ class _OverallLength(_Section):
     overall_length: Annotated[float, _in_range(limits.LENGTH_MM, "mm", "1 mm to 100 m")]
 
 
+CONTACT_KEYS = {"plane": ("point", "normal"), "sphere": ("center", "radius"), "cylinder": ("start", "end", "radius")}
+
+
+class ContactObstacleSection(_Section):
+    """[[contact.obstacles]]: one analytic obstacle; which keys a kind takes is checked by _contact_obstacle (mm)."""
+
+    kind: str
+    name: str | None = None
+    point: Point | None = None
+    normal: Direction | None = None
+    center: Point | None = None
+    start: Point | None = None
+    end: Point | None = None
+    radius: Annotated[float, _positive("mm")] | None = None
+
+
+class ContactSection(_Section):
+    """[contact]: self-contact and the obstacles the hose may touch."""
+
+    self_contact: bool = Field(False, alias="self")
+    obstacles: list[ContactObstacleSection] = Field(default_factory=list)
+
+
 class ProblemFile(_Section):
     """The whole problem file ([mounts] is resolved into [start] and [end] before this model sees it)."""
 
@@ -500,6 +554,7 @@ class ProblemFile(_Section):
     end: EndSection
     environment: EnvironmentSection = Field(default_factory=EnvironmentSection)
     clips: list[ClipSection] = Field(default_factory=list)
+    contact: ContactSection | None = None
 
     @model_validator(mode="after")
     def _hose_reaches(self) -> "ProblemFile":
@@ -569,7 +624,7 @@ def _unknown_key(model: type[BaseModel], loc: tuple, prefix: tuple = ()) -> str:
     """Name the unknown key at `loc` below `model` (which sits at `prefix` in the file) and suggest
     the nearest known one (or list them)."""
     section = _section_model(model, loc[:-1])
-    known = list(section.model_fields) if section else []
+    known = [field.alias or name for name, field in section.model_fields.items()] if section else []
     table = _path(prefix + loc[:-1])
     close = difflib.get_close_matches(str(loc[-1]), known, n=1, cutoff=0.6)
     hint = f"did you mean '{table + '.' if table else ''}{close[0]}'?" if close else "allowed keys: " + ", ".join(known)
@@ -581,6 +636,7 @@ _TYPE_REASONS = {
     "int_type": "must be a whole number",
     "list_type": "must be a list of three numbers, e.g. [0.0, 1.0, 0.0]",
     "string_type": 'must be text in quotes, e.g. "front brake hose"',
+    "bool_type": "must be true or false",
 }
 
 
@@ -652,6 +708,8 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             name=spec.name,
             clips=tuple(_clip(index, clip) for index, clip in enumerate(spec.clips)),
             fittings=fittings,
+            contact=_contact_obstacles(spec.contact),
+            self_contact=spec.contact is not None and spec.contact.self_contact,
         )
     except ValueError as exc:  # the model's own checks; its messages name the field
         raise ProblemFileError(f"{source}: {exc}") from None
@@ -691,6 +749,60 @@ def _clip(index: int, section: ClipSection) -> Clip:
         return Clip(section.type, section.point, section.arc_length, section.direction, section.name)
     except ValueError as exc:
         raise ValueError(f"clips[{index}]: {exc}") from None
+
+
+def _contact_obstacles(section: ContactSection | None) -> tuple[Obstacle, ...]:
+    """The obstacles of [[contact.obstacles]], named by default after their kind (numbered when repeated)."""
+    if section is None:
+        return ()
+    kinds = [table.kind for table in section.obstacles]
+    counters: dict[str, int] = {}
+    obstacles = []
+    for index, table in enumerate(section.obstacles):
+        counters[table.kind] = counters.get(table.kind, 0) + 1
+        default = table.kind if kinds.count(table.kind) == 1 else f"{table.kind} {counters[table.kind]}"
+        obstacles.append(_contact_obstacle(index, table, table.name or default))
+    return tuple(obstacles)
+
+
+def _contact_obstacle(index: int, table: ContactObstacleSection, name: str) -> Obstacle:
+    """The Obstacle of one [[contact.obstacles]] table; its errors name the table and the key."""
+    label = f"contact.obstacles[{index}]"
+    if table.kind not in CONTACT_KEYS:
+        raise ValueError(f"{label}.kind = {_show(table.kind)}: must be one of "
+                         f"{', '.join(repr(kind) for kind in CONTACT_KEYS)} (boxes and meshes are not implemented yet)")
+    keys = CONTACT_KEYS[table.kind]
+    given = [key for key in ("point", "normal", "center", "start", "end", "radius") if getattr(table, key) is not None]
+    missing = [key for key in keys if key not in given]
+    extra = [key for key in given if key not in keys]
+    if missing or extra:
+        problem = f"missing {', '.join(missing)}" if missing else f"{', '.join(extra)} given"
+        raise ValueError(f"{label}: a {table.kind} takes {' and '.join(keys)} (mm): {problem}")
+    try:
+        if table.kind == "plane":
+            return Plane(table.point, table.normal, name)
+        if table.kind == "sphere":
+            return Sphere(table.center, table.radius, name)
+        return Cylinder(table.start, table.end, table.radius, name)
+    except ValueError as exc:
+        raise ValueError(f"{label}: {exc}") from None
+
+
+def _contact_dict(problem: Problem) -> dict[str, Any]:
+    """{"contact": {...}} in the file format, or {} without contact."""
+    if not problem.has_contact:
+        return {}
+    tables = []
+    for obstacle in problem.contact:
+        if isinstance(obstacle, Plane):
+            table = {"kind": "plane", "point": _floats(obstacle.point), "normal": _floats(obstacle.normal)}
+        elif isinstance(obstacle, Sphere):
+            table = {"kind": "sphere", "center": _floats(obstacle.centre), "radius": float(obstacle.radius)}
+        else:
+            table = {"kind": "cylinder", "start": _floats(obstacle.start), "end": _floats(obstacle.end),
+                     "radius": float(obstacle.radius)}
+        tables.append(table | {"name": obstacle.name})
+    return {"contact": {"self": bool(problem.self_contact), "obstacles": tables}}
 
 
 def _with_fittings_resolved(data: dict, source: str) -> tuple[dict, EndFittings | None]:
@@ -907,7 +1019,8 @@ def problem_to_dict(problem: Problem, poisson_ratio: float | None = None) -> dic
             "twist": float(problem.end_twist_deg),
         },
         "environment": {"gravity": _floats(problem.gravity)},
-    } | ({"clips": [_clip_dict(clip) for clip in problem.clips]} if problem.clips else {}) | _fittings_dict(problem)
+    } | ({"clips": [_clip_dict(clip) for clip in problem.clips]} if problem.clips else {}) | _fittings_dict(problem) \
+      | _contact_dict(problem)
 
 
 def _fittings_dict(problem: Problem) -> dict[str, Any]:
@@ -952,8 +1065,10 @@ def problem_to_toml(problem: Problem, poisson_ratio: float | None = None) -> str
             for header, table in zip(headers, tables):
                 lines.append(f"\n{header}")
                 nested = {name: item for name, item in table.items() if isinstance(item, dict)}
+                arrays = {name: item for name, item in table.items()  # tables inside this one: [[contact.obstacles]]
+                          if isinstance(item, list) and item and all(isinstance(entry, dict) for entry in item)}
                 for name, item in table.items():
-                    if name not in nested:
+                    if name not in nested and name not in arrays:
                         text = f"{name} = {_toml_value(item)}"
                         lines.append(f"{text:<45} # {_UNITS.get(f'{key}.{name}', _UNITS.get(name))}")
                 for name, inner in nested.items():  # a table inside this one: [hose.stiffeners]
@@ -961,6 +1076,12 @@ def problem_to_toml(problem: Problem, poisson_ratio: float | None = None) -> str
                     for inner_name, item in inner.items():
                         text = f"{inner_name} = {_toml_value(item)}"
                         lines.append(f"{text:<45} # {_UNITS.get(inner_name)}")
+                for name, entries in arrays.items():
+                    for entry in entries:
+                        lines.append(f"\n[[{key}.{name}]]")
+                        for inner_name, item in entry.items():
+                            text = f"{inner_name} = {_toml_value(item)}"
+                            lines.append(f"{text:<45} # {_UNITS.get(f'{name}.{inner_name}', _UNITS.get(inner_name))}")
         else:
             lines.append(f"{key} = {_toml_value(value)}")
     return "\n".join(lines) + "\n"
@@ -969,6 +1090,8 @@ def problem_to_toml(problem: Problem, poisson_ratio: float | None = None) -> str
 def _toml_value(value: Any) -> str:
     if isinstance(value, list):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, bool):
+        return "true" if value else "false"
     if isinstance(value, str):
         return json.dumps(value)  # a JSON string is a valid TOML basic string
     return repr(value)  # int, or float in the shortest form that reads back exactly

@@ -205,6 +205,9 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
         raise
     except ProblemFileError as exc:
         raise SweepFileError(str(exc)) from None
+    if problem.has_contact:
+        raise SweepFileError(f"{source}: [contact]: a sweep does not take contact yet (its [[obstacles]] are meshes it "
+                             "measures clearance to); remove [contact], or place the hose at one pose with hoseline solve")
     tables = _validated(SweepTables, sweep_part, source, error=SweepFileError)
     motions = tuple(_motion(body, base, source) for body in tables.bodies)
     obstacles = tuple(_obstacle(item, base, source) for item in tables.obstacles)

@@ -2,10 +2,11 @@
 
 The rod's terms come from newton.evaluate (clips included: clipped_newton through it), the
 contact terms from contact.py.  The contact Hessian couples every segment before a station in
-contact (contact.py), so the system is solved dense: the KKT matrix [[H, J^T], [J, 0]] is
-factored by LAPACK's symmetric indefinite LDL^T (sytrf), which also gives its inertia, so the
-number of unstable directions on the constraint tangent space is neg(KKT) - m, as in
-banded.py.  A hundred segments make a 303 x 303 matrix: a millisecond or two per iteration.
+contact (contact.py), but only through the stations: it is the banded rod Hessian plus a
+low-rank term, and contact_solve.py solves the KKT system [[H, J^T], [J, 0]] with the banded
+factor bordered by the constraint rows and the low-rank columns, which also gives the number of
+unstable directions on the constraint tangent space (neg(KKT) - m, as in banded.py).  Where that
+factor is not to be trusted it falls back to the dense matrix and LAPACK's sytrf.
 
 Step filter (StepFilter).  No step may cross into an obstacle or the hose itself: a rotation
 delta_i moves every station beyond segment i by at most h |delta_i| (a rotation by an angle moves
@@ -23,10 +24,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg.lapack as lapack
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
-from hoseline.mechanics.banded import NEUTRAL
 from hoseline.mechanics.clipped import unknown_layout
 from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
 from hoseline.mechanics.contact import (
@@ -40,10 +39,28 @@ from hoseline.mechanics.contact import (
     pair_gaps,
     rotation_terms,
 )
+from hoseline.mechanics.contact_solve import (
+    banded_step,
+    dense_step,
+    kkt_solves,
+    low_rank_columns,
+    rotation_gradient_and_band,
+)
 from hoseline.mechanics.newton import NewtonReport, RodProperties, apply_step, evaluate
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 
 SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
+
+
+_CONTROLLER: list[ThreadpoolController] = []
+
+
+def _blas_threads() -> ThreadpoolController:
+    """The BLAS thread pools, found once: a ThreadpoolController scans the loaded libraries when made
+    (about 1 ms), which a sweep pose must not pay each time."""
+    if not _CONTROLLER:
+        _CONTROLLER.append(ThreadpoolController())
+    return _CONTROLLER[0]
 
 
 @dataclass(frozen=True)
@@ -89,11 +106,18 @@ def self_exclusion(hose_radius: float, segment_length: float) -> int:
 
 @dataclass
 class ContactSystem:
-    """The rod's Lagrangian with contact at one state: dense Hessian, constraint, residual, active pairs."""
+    """The rod's Lagrangian with contact at one state: Hessian, constraint, residual, active pairs.
+
+    The Hessian is band + columns diag(signs) columns^T (contact_solve.py): band, the rod's and the
+    contact's segment-load blocks (lower band storage); columns (n, r) and signs (r,) of +-1, the
+    station term.  dense() assembles it as one matrix by contact.rotation_terms, independently.
+    """
 
     energy: float
     grad: np.ndarray
-    hess: np.ndarray
+    band: np.ndarray
+    columns: np.ndarray
+    signs: np.ndarray
     jac_t: np.ndarray
     constraint: np.ndarray
     residual: float
@@ -102,6 +126,16 @@ class ContactSystem:
     on_hose: np.ndarray
     on_other: np.ndarray
     gaps: np.ndarray
+    stations: tuple  # (rod band, frames, h, node_grad, node_hess, index): what dense() assembles from
+
+    def dense(self) -> np.ndarray:
+        """The Hessian (n, n) assembled dense: the rod's band and contact.rotation_terms (suffix sums, O(N^2))."""
+        rod_band, frames, h, node_grad, node_hess, index = self.stations
+        hess = _dense(rod_band)
+        if index is not None:
+            rows = (index[:, None] + np.arange(3)[None, :]).reshape(-1)
+            hess[np.ix_(rows, rows)] += rotation_terms(frames, h, node_grad, node_hess)[1]
+        return hess
 
 
 def rotation_index(props: RodProperties, clamps: Clamps, state: RodState) -> np.ndarray:
@@ -133,53 +167,34 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
         nodes, model.hose_radius, weight, model.activation, model.planes, model.balls, model.capsules, kinds, first, second
     )
     grad = base.grad.copy()
-    hess = _dense(base.band)
+    band = base.band.copy()
+    columns, signs, index = np.zeros((grad.size, 0)), np.zeros(0), None
     if kinds.size:
-        c_grad, c_hess = rotation_terms(state.frames, h, node_grad, node_hess)
-        index = (rotation_index(props, clamps, state)[:, None] + np.arange(3)[None, :]).reshape(-1)
-        grad[index] += c_grad
-        hess[np.ix_(index, index)] += c_hess
+        index = rotation_index(props, clamps, state)
+        grad += rotation_gradient_and_band(state.frames, h, node_grad, index, band)
+        columns, signs = low_rank_columns(state.frames, h, node_hess, kinds, first, second, index, grad.size)
     end_forces = np.linalg.norm(state.end_force) + np.linalg.norm(clip_forces(clamps, state))
     contact_total = float(np.sum(np.linalg.norm(forces, axis=1))) if kinds.size else 0.0
     weight_total = float(np.linalg.norm(clamps.line_weight)) * props.length
     scale = props.largest_stiffness / props.length + (end_forces + weight_total + contact_total) * props.length
     residual = max(float(np.max(np.abs(grad))) / scale, float(np.max(np.abs(base.constraint))) / props.length)
-    return ContactSystem(base.energy + energy, grad, hess, base.jac_t, base.constraint, residual, (kinds, first, second),
-                         forces, on_hose, on_other, gaps)
+    return ContactSystem(base.energy + energy, grad, band, columns, signs, base.jac_t, base.constraint, residual,
+                         (kinds, first, second), forces, on_hose, on_other, gaps,
+                         (base.band, state.frames, h, node_grad, node_hess, index))
 
 
 def _kkt_step(system: ContactSystem) -> tuple[np.ndarray, np.ndarray, int]:
-    """(step, multiplier step, unstable directions on the constraint tangent space) of the dense KKT system."""
-    n, m = system.jac_t.shape
-    kkt = np.zeros((n + m, n + m))
-    kkt[:n, :n] = system.hess
-    kkt[:n, n:] = system.jac_t
-    kkt[n:, :n] = system.jac_t.T
-    factor, pivots, info = lapack.dsytrf(kkt, lower=1)
-    if info < 0:
-        raise ValueError(f"LAPACK dsytrf: argument {-info} is invalid")
-    rhs = np.concatenate([-system.grad, -system.constraint])
-    solution, info = lapack.dsytrs(factor, pivots, rhs, lower=1)
-    if info != 0 or not np.all(np.isfinite(solution)):
-        return np.full(n, np.nan), np.full(m, np.nan), -1
-    return solution[:n], -solution[n:], _negative_pivots(factor, pivots) - m
+    """(step, multiplier step, unstable directions on the constraint tangent space) of the KKT system.
 
-
-def _negative_pivots(factor: np.ndarray, pivots: np.ndarray) -> int:
-    """Negative eigenvalues of the factored matrix: those of D's 1x1 and 2x2 blocks (Sylvester's law)."""
-    values = []
-    k = 0
-    size = factor.shape[0]
-    while k < size:
-        if pivots[k] > 0:
-            values.append(factor[k, k])
-            k += 1
-        else:
-            block = np.array([[factor[k, k], factor[k + 1, k]], [factor[k + 1, k], factor[k + 1, k + 1]]])
-            values.extend(np.linalg.eigvalsh(block))
-            k += 2
-    values = np.array(values)
-    return int(np.sum(values < -NEUTRAL * np.max(np.abs(values))))
+    The banded factor with the low-rank border (contact_solve.banded_step); the dense matrix and
+    LAPACK's sytrf where that is not to be trusted (counted in contact_solve.kkt_solves).
+    """
+    solved = banded_step(system.band, system.jac_t, system.columns, system.signs, system.grad, system.constraint)
+    if solved is not None:
+        kkt_solves["banded"] += 1
+        return solved
+    kkt_solves["dense"] += 1
+    return dense_step(system.dense(), system.jac_t, system.grad, system.constraint)
 
 
 @dataclass
@@ -248,7 +263,7 @@ def solve_with_contact(
     One BLAS thread: the dense systems are small, and threads only contend for the cores (10x
     slower on a loaded two-core machine).
     """
-    with threadpool_limits(1):
+    with _blas_threads().limit(limits=1):
         return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations)
 
 

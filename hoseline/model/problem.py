@@ -10,6 +10,7 @@ from hoseline.model.clips import Clip, clip_node, off_station_message
 from hoseline.model.fittings import EndFittings
 from hoseline.model.hose import Hose
 from hoseline.model.mounts import Mount, mount_distance
+from hoseline.model.obstacles import Obstacle
 
 STRAIGHT_MARGIN = 1e-9  # relative: a hose pulled straight between its mounts has no equilibrium to solve for
 
@@ -32,6 +33,9 @@ class Problem:
     clips: intermediate supports (model/clips.py), in order of arc length; each on a station of the hose.
     fittings: the ports and rigid end fittings (model/fittings.py) when the user gave them; start and end
         are then the fitting outlets (what the solver clamps) and hose.length is the free length.
+    contact: obstacles the hose touches without entering (model/obstacles.py: plane, sphere, cylinder; mm),
+        frictionless; each with its own name.
+    self_contact: keep the hose out of itself (segments far enough apart along it).
     """
 
     hose: Hose
@@ -42,6 +46,8 @@ class Problem:
     name: str = "hose"
     clips: tuple[Clip, ...] = ()
     fittings: EndFittings | None = None
+    contact: tuple[Obstacle, ...] = ()
+    self_contact: bool = False
 
     def __post_init__(self) -> None:
         g = np.asarray(self.gravity, dtype=float).reshape(-1)
@@ -59,6 +65,29 @@ class Problem:
         object.__setattr__(self, "clips", tuple(self.clips))
         self._check_clips()
         self._check_fittings()
+        object.__setattr__(self, "contact", tuple(self.contact))
+        self._check_contact()
+
+    @property
+    def has_contact(self) -> bool:
+        """Whether the placement keeps the hose out of obstacles or itself."""
+        return bool(self.contact) or self.self_contact
+
+    def _check_contact(self) -> None:
+        """Obstacle names unique (they label the report) and not "self"; no contact with what it does not take yet."""
+        names = [obstacle.name for obstacle in self.contact]
+        for index, name in enumerate(names):
+            if name == "self" or name in names[:index]:
+                reason = "is reserved for self-contact" if name == "self" else "is used by an earlier obstacle"
+                raise ValueError(f"contact.obstacles[{index}].name = {name!r} {reason}: give each obstacle its own name")
+        if not self.has_contact:
+            return
+        if self.hose.stiffeners is not None:
+            raise ValueError("[contact] with [hose.stiffeners]: contact on a hose with stiffener springs is not "
+                             "implemented yet; remove the stiffeners or the contact")
+        if any(clip.slides for clip in self.clips):
+            raise ValueError("[contact] with a sliding clip: not implemented yet (the hose's segments stretch next "
+                             "to the clip); use a rotating clip at a chosen arc_length or remove the contact")
 
     def _check_fittings(self) -> None:
         """With fittings, start and end must be their outlets (a moved port needs its fittings moved too)."""

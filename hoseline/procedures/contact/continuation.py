@@ -15,7 +15,7 @@ from typing import Callable
 from hoseline.mechanics.contact_newton import ContactModel, solve_with_contact
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState
-from hoseline.procedures.placement.continuation import PlacementError, StepControl
+from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, StepControl
 
 CONTACT_TOLERANCE = 1e-9  # loosest final residual: the barrier's stiffness (pressure / gap) lifts the rounding floor
 
@@ -29,11 +29,14 @@ def follow_contact(
     *,
     start: float = 0.0,
     control: StepControl = StepControl(),
+    log: ContinuationLog | None = None,
+    progress: Progress | None = None,
 ) -> tuple[RodState, int]:
     """Follow the stable equilibrium with contact from fraction `start` (where `state` is one) to 1.
 
-    Returns (state at fraction 1, Newton iterations used).  Raises PlacementError with the phase,
-    the fraction and Newton's message when the path cannot be followed.
+    Returns (state at fraction 1, Newton iterations used).  log: if given, its iteration and step
+    counters grow.  progress: optional callable(phase, fraction) after each step.  Raises
+    PlacementError with the phase, the fraction and Newton's message when the path cannot be followed.
     """
     t, dt, iterations = start, min(control.first, 1.0 - start), 0
     while t < 1.0 - 1e-14:
@@ -41,6 +44,8 @@ def follow_contact(
         tolerance = max(control.tolerance, CONTACT_TOLERANCE) if t_next == 1.0 else control.path_tolerance
         trial, report = solve_with_contact(props, path(t_next), state, model, tolerance=tolerance)
         iterations += report.iterations
+        if log is not None:
+            log.iterations += report.iterations
         if not report.converged or report.unstable_directions != 0:
             dt *= 0.5
             if dt < control.smallest:
@@ -51,6 +56,10 @@ def follow_contact(
                 )
             continue
         state, t = trial, t_next
+        if log is not None:
+            log.steps += 1
+        if progress is not None:
+            progress(phase, t)
         if report.iterations <= control.fast_iterations:
             dt = min(control.largest, 2.0 * dt)
     return state, iterations

@@ -27,6 +27,9 @@ def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress |
     """
     if not (math.isfinite(accuracy) and accuracy > 0.0):
         raise ValueError(f"accuracy {accuracy!r} mm: give a positive number of mm")
+    if problem.has_contact:
+        raise PlacementError("--accuracy does not take contact yet (the error estimate's half-segment solve is not "
+                             "made with contact): give hose.segments instead")
     step = clip_segment_step(problem)
     segments = _multiple(int(problem.hose.segments), step)
     tried: dict[int, Result] = {}

@@ -70,6 +70,41 @@ class ClipReaction:
                 "force_N": self.force.tolist(), "moment_Nmm": self.moment.tolist()}
 
 
+@dataclass(frozen=True)
+class ObstacleContact:
+    """Where and how hard the hose presses on one obstacle (or on itself, name "self") at equilibrium.
+
+    name, kind: as in the problem ("plane", "sphere", "cylinder"; "self" for self-contact).
+    min_gap: smallest gap between the hose surface and the obstacle, mm (>= 0; inf if never near).
+    One row per contact pair (gap below the barrier's activation distance, see docs/model.md Contact):
+    arc_length (k,) mm of the hose point from the start fitting; point (k, 3) mm on the hose's
+    centreline; surface_point (k, 3) mm on the obstacle's surface; gap (k,) mm; force (k, 3) N, the
+    obstacle's push on the hose (for self-contact, on the first pass: the second gets its opposite).
+    total_force: (3,) N, the sum.  length_in_contact: mm, h times the stations (plane) or segments
+    touching (a count at the resolution of the stations, see docs/model.md Contact).
+    """
+
+    name: str
+    kind: str
+    min_gap: float
+    arc_length: np.ndarray
+    point: np.ndarray
+    surface_point: np.ndarray
+    gap: np.ndarray
+    force: np.ndarray
+    total_force: np.ndarray
+    length_in_contact: float
+
+    def summary(self) -> dict:
+        """For result.json (user units)."""
+        return {"name": self.name, "kind": self.kind,
+                "min_gap_mm": None if not np.isfinite(self.min_gap) else float(self.min_gap),
+                "total_force_N": self.total_force.tolist(), "length_in_contact_mm": float(self.length_in_contact),
+                "points": [{"arc_length_mm": float(s), "point_mm": p.tolist(), "surface_point_mm": q.tolist(),
+                            "gap_mm": float(g), "force_N": f.tolist()}
+                           for s, p, q, g, f in zip(self.arc_length, self.point, self.surface_point, self.gap, self.force)]}
+
+
 @dataclass
 class Result:
     """Static equilibrium of a hose placed between two mounts.
@@ -112,6 +147,8 @@ class Result:
     discretisation_error: estimated largest station error from the segment count, mm (Richardson
         extrapolation from one solve with half the segments); None if not estimated.
     clips: the load of every clip on the hose (ClipReaction), in the order of problem.clips.
+    contacts: with contact in the problem, one ObstacleContact per obstacle (in the order of
+        problem.contact) and one named "self" with self-contact; empty without.
     events: human-readable log of what happened along the continuation (bifurcations, branch switches).
     residual: final relative residual of the force and moment balance.
     """
@@ -151,6 +188,7 @@ class Result:
     events: list[str] = field(default_factory=list)
     discretisation_error: float | None = None
     clips: list[ClipReaction] = field(default_factory=list)
+    contacts: list[ObstacleContact] = field(default_factory=list)
 
     @property
     def stable(self) -> bool:
@@ -164,8 +202,12 @@ class Result:
 
     def summary(self) -> dict:
         """Scalars for reports and result.json (user units); "clips" only when the problem has clips, the
-        lengths and "end_fittings" only when it has end fittings."""
+        lengths and "end_fittings" only when it has end fittings, "contact" only when it has contact."""
         clips = {"clips": [clip.summary() for clip in self.clips]} if self.clips else {}
+        if self.contacts:
+            gaps = [contact.min_gap for contact in self.contacts if np.isfinite(contact.min_gap)]
+            clips["contact"] = {"min_gap_mm": float(min(gaps)) if gaps else None,
+                                "obstacles": [contact.summary() for contact in self.contacts]}
         clips |= fittings_summary(self.problem)
         return {
             "name": self.problem.name,

@@ -14,6 +14,12 @@ bifurcation.  Both sides of the buckle in the bending plane are solved and the s
 of lower energy is kept (the end rotation decides it); the out-of-plane sides are tried
 only when neither in-plane side is stable.  Stability is monitored along the whole path
 (see continuation.py).
+
+With contact (Problem.contact, Problem.self_contact) the same sequence runs with the contact
+Newton (procedures/contact/): after the first step (taken without contact, from the straight
+hose, which must clear every obstacle, as must the buckled shape) the place and twist phases
+and the final equilibrium keep the hose out of the obstacles and itself; the result reports the
+contacts per obstacle.  The mounts' symmetry images and the error estimate are skipped then.
 """
 
 from __future__ import annotations
@@ -46,6 +52,9 @@ from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.stiffening import phase_in_springs
 from hoseline.procedures.placement.stations import build_result
 from hoseline.procedures.placement.accuracy import coarse_segments, richardson_error
+from hoseline.procedures.contact import placement as contact_placement
+from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact
+from hoseline.mechanics.contact_newton import solve_with_contact
 from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, symmetric_images
 
 __all__ = ["solve", "PlacementError", "rod_properties"]
@@ -207,18 +216,32 @@ def solve(
     log = ContinuationLog()
     sequence = _Sequence(problem, props, control, progress)
     state = _initial_buckle(sequence.place_props, sequence.path.place, control.first, sequence.path.axis, log)
+    state = sequence.clear_buckle(state, log)
     final, state, lock_angle_deg, residual = sequence.finish(log, "place", control.first, state)
 
     result = build_result(problem, props, final, state, lock_angle_deg, log, started, residual)
+    if sequence.contact is not None:
+        result = contact_placement.with_contact(result, props, final, state, sequence.contact)
     others = fork_branches(props, final, state, log.forks, sequence.finish)
-    others += symmetric_images(problem, props, final, state, lock_angle_deg)  # with clips: those they allow
+    if sequence.contact is None:
+        others += symmetric_images(problem, props, final, state, lock_angle_deg)  # with clips: those they allow
+    else:
+        result.events.append("uniqueness: with contact, the mounts' symmetry images are not checked (the obstacles "
+                             "need not share the symmetry); the other branches of the first buckle are")
     others = judge_uniqueness(result, props, final, state, others, log.forks)
     if alternatives:
         result.alternatives = [
             build_result(problem, props, other.clamps, other.state, other.lock_angle_deg, log, started, residual)
             for other in others
         ]
-    if estimate_error:
+        if sequence.contact is not None:
+            result.alternatives = [
+                contact_placement.with_contact(other_result, props, other.clamps, other.state, sequence.contact)
+                for other_result, other in zip(result.alternatives, others)
+            ]
+    if estimate_error and sequence.contact is not None:
+        result.events.append("accuracy: the discretisation error is not estimated with contact yet")
+    elif estimate_error:
         coarse_count = coarse_segments(props.segments, MIN_SEGMENTS)
         coarse_final = _coarse_clamps(final, state, props.segments, coarse_count, props.length)
         if coarse_final is None:
@@ -248,14 +271,44 @@ class _Sequence:
         self.locked_frame: np.ndarray | None = None  # of the main run, for forks met while twisting
         self.locked_clips: tuple[ClipHold, ...] = ()
         self.lock_angle_deg = 0.0
+        self.contact = contact_placement.problem_contact_model(problem) if problem.has_contact else None
+
+    def clear_buckle(self, state: RodState, log: ContinuationLog) -> RodState:
+        """With contact, the first buckled shape (of `state` and the other sides relaxed at the first step) that
+        clears every obstacle, noted as an event when it is not `state`; `state` itself without contact."""
+        if self.contact is None or not log.forks:
+            return state
+        clamps = self.path.place(self.control.first)
+        for other in log.forks[-1].others:
+            if contact_placement.is_clear(self.props, clamps, state, self.contact):
+                break
+            if contact_placement.is_clear(self.props, clamps, other, self.contact):
+                log.events.append("place: with contact, kept the buckled side that clears the obstacles (the one of "
+                                  "lowest energy enters one)")
+                return other
+        return state
+
+    def _follow(self, phase: str, path, props: RodProperties, state: RodState, log: ContinuationLog, fraction: float,
+                control: StepControl) -> RodState:
+        """follow, or follow_contact when the problem has contact."""
+        if self.contact is None:
+            return follow(phase, path, props, state, log, start=fraction, control=control, progress=self.progress)
+        return follow_contact(phase, path, props, state, self.contact, start=fraction, control=control, log=log,
+                              progress=self.progress)[0]
 
     def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState):
         """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`."""
         problem, props, control = self.problem, self.props, self.control
         if phase == "place":
             place_path = self.path.place
-            state = follow("place", place_path, self.place_props, state, log, start=fraction, control=control,
-                           progress=self.progress)
+            if self.contact is not None:
+                contact_placement.check_clear("the straight hose the placement starts from", props, place_path(0.0),
+                                              RodState(np.repeat(self.path.start_frame[None], props.segments, axis=0),
+                                                       np.zeros(3), 0.0), self.contact)
+                contact_placement.check_clear(f"the buckled hose at fraction {fraction:g} of the place phase (the first "
+                                              "step, taken without contact)", props, place_path(fraction), state,
+                                              self.contact)
+            state = self._follow("place", place_path, self.place_props, state, log, fraction, control)
             if props.springs is not None:
                 state = phase_in_springs(props, place_path(1.0), state, log, self.progress)
             locked_frame = end_frame_of(place_path(1.0), state)
@@ -280,10 +333,13 @@ class _Sequence:
                 first=min(control.first, math.radians(30.0) / abs(twist)),
                 largest=min(control.largest, math.radians(45.0) / abs(twist)),
             )
-            state = follow("twist", twist_path, props, state, log, start=fraction, control=twist_control,
-                           progress=self.progress)
+            state = self._follow("twist", twist_path, props, state, log, fraction, twist_control)
         final = twist_path(1.0)
-        state, report = solve_equilibrium(props, final, state, tolerance=control.tolerance)
+        if self.contact is None:
+            state, report = solve_equilibrium(props, final, state, tolerance=control.tolerance)
+        else:
+            state, report = solve_with_contact(props, final, state, self.contact,
+                                               tolerance=max(control.tolerance, CONTACT_TOLERANCE))
         log.iterations += report.iterations
         if not report.converged or report.unstable_directions != 0:
             raise PlacementError(
@@ -452,5 +508,6 @@ def place_only(problem: Problem, control: StepControl = StepControl()) -> tuple[
     log = ContinuationLog()
     sequence = _Sequence(problem, props, control, None)
     state = _initial_buckle(sequence.place_props, sequence.path.place, control.first, sequence.path.axis, log)
+    state = sequence.clear_buckle(state, log)
     final, state, lock_angle_deg, _ = sequence.finish(log, "place", control.first, state)
     return props, final, state, lock_angle_deg

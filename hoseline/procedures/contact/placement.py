@@ -1,0 +1,147 @@
+"""Contact in the placement of a problem: its contact model, the clear start, and what the result reports.
+
+The placement sequence (procedures/placement/sequence.py) calls these when the problem has
+contact (Problem.contact or Problem.self_contact): the model of its obstacles, a check that the
+state the contact continuation starts from clears every obstacle (else a PlacementError naming
+the obstacle and what to do), and, on the converged shape, the contact points, forces and
+lengths per obstacle, the internal force with the contact loads, the stability margin with the
+barrier's Hessian, and a last check that nothing penetrates.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.linalg
+
+from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_PLANE, node_terms
+from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact, penetration_message
+from hoseline.mechanics.newton import RodProperties
+from hoseline.mechanics.rod import Clamps, RodState, centerline
+from hoseline.model.obstacles import Cylinder, Plane, Sphere
+from hoseline.model.problem import Problem
+from hoseline.procedures.contact.model import bend_length, contact_model, reference_pressure
+from hoseline.procedures.placement.continuation import PlacementError
+from hoseline.procedures.placement.result import ObstacleContact, Result
+
+
+def problem_contact_model(problem: Problem) -> ContactModel:
+    """The ContactModel of the problem's obstacles (and self-contact) with the reference pressure of its hose.
+
+    The bend length (model.bend_length) is the shortest of the hose length and R + r over round
+    obstacles; with self-contact also pi r, the tightest U-turn of two touching passes.
+    """
+    hose = problem.hose
+    weight = hose.mass_per_length * float(np.linalg.norm(problem.gravity)) * 1e-3  # kg/m * m/s^2 = N/m -> N/mm
+    length = bend_length(hose.length, problem.contact, hose.outer_radius)
+    if problem.self_contact:
+        length = min(length, math.pi * hose.outer_radius)
+    pressure = reference_pressure(weight, float(np.max(hose.stiffness_vector[:2])), length)
+    return contact_model(problem.contact, hose.outer_radius, hose.segment_length, pressure,
+                         self_contact=problem.self_contact)
+
+
+def is_clear(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> bool:
+    """Whether `state` keeps a positive gap to every obstacle (and itself, with self-contact)."""
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    return model.pairs(nodes, 0.0)[0].size == 0
+
+
+def check_clear(where: str, props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> None:
+    """Raise PlacementError naming the obstacle, the station or segment and the depth if `state` touches or
+    enters anything; where: what the state is, for the message (e.g. "the straight hose the placement starts from")."""
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    kinds, first, second, gaps = model.pairs(nodes, 0.0)
+    if kinds.size == 0:
+        return
+    worst = int(np.argmin(gaps))
+    raise PlacementError(
+        f"placement with contact: {where} is not clear: {penetration_message(model, kinds[worst], first[worst], second[worst], gaps[worst])}. "
+        "The placement carries the hose from a straight line out of the start fitting (along start.direction, the "
+        "hose length long) to the end fitting, and needs that start clear of every obstacle: move or shorten the "
+        "obstacle so that it does not meet that line, or remove it from [contact]")
+
+
+def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState,
+                    model: ContactModel) -> list[ObstacleContact]:
+    """One ObstacleContact per obstacle of the problem (and "self" with self-contact) at `state` (mm, N)."""
+    h = props.segment_length
+    nodes = centerline(state.frames, clamps.start_point, h)
+    kinds, first, second, gaps = model.pairs(nodes, math.inf)
+    active = gaps < model.activation
+    forces, on_hose, on_other, active_gaps = node_terms(
+        nodes, model.hose_radius, model.stiffness * h, model.activation, model.planes, model.balls, model.capsules,
+        kinds[active], first[active], second[active])[3:]
+    owners = np.array([model.owner(kind, j) for kind, j in zip(kinds, second)], dtype=object)
+    active_owners = owners[active]
+    a_kinds, a_first, a_second = kinds[active], first[active], second[active]
+    arc = np.where(a_kinds == STATION_PLANE, a_first * h,
+                   a_first * h + np.linalg.norm(on_hose - nodes[np.minimum(a_first, props.segments)], axis=1))
+    names = [obstacle.name for obstacle in problem.contact] + (["self"] if problem.self_contact else [])
+    kind_of = {obstacle.name: _kind(obstacle) for obstacle in problem.contact} | {"self": "self"}
+    reports = []
+    for name in names:
+        mine = active_owners == name
+        where = np.flatnonzero(owners == name)
+        touching = set(a_first[mine].tolist())
+        if name == "self":
+            touching |= set(a_second[mine].tolist())
+        order = np.argsort(arc[mine], kind="stable")
+        force = forces[mine][order]
+        reports.append(ObstacleContact(
+            name=name, kind=kind_of[name], min_gap=float(np.min(gaps[where])) if where.size else math.inf,
+            arc_length=arc[mine][order], point=on_hose[mine][order], surface_point=on_other[mine][order],
+            gap=active_gaps[mine][order], force=force, total_force=force.sum(axis=0),
+            length_in_contact=h * len(touching)))
+    return reports
+
+
+def _kind(obstacle) -> str:
+    return {Plane: "plane", Sphere: "sphere", Cylinder: "cylinder"}[type(obstacle)]
+
+
+def contact_forces_beyond(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> np.ndarray:
+    """(N+1, 3) N: the sum of the contact forces on the part of the hose beyond each station.
+
+    A station-plane force at station k acts beyond the stations before k; a segment's force (on segment
+    i, between stations i and i + 1) beyond stations 0..i; a self-contact pair pushes its first segment
+    and pulls the second the other way."""
+    h = props.segment_length
+    nodes = centerline(state.frames, clamps.start_point, h)
+    kinds, first, second, _ = model.pairs(nodes, model.activation)
+    forces = node_terms(nodes, model.hose_radius, model.stiffness * h, model.activation, model.planes, model.balls,
+                        model.capsules, kinds, first, second)[3]
+    beyond = np.zeros((props.segments + 1, 3))
+    stations = np.arange(props.segments + 1)
+    for kind, i, j, force in zip(kinds, first, second, forces):
+        beyond[stations < i if kind == STATION_PLANE else stations <= i] += force
+        if kind == SEGMENT_SEGMENT:
+            beyond[stations <= j] -= force
+    return beyond
+
+
+def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:
+    """Smallest eigenvalue of the Hessian with the barrier, on the tangent space of the constraints, per length
+    (N/rad^2, as Result.stability_margin)."""
+    system = evaluate_contact(props, clamps, state, model)
+    basis = scipy.linalg.null_space(np.asarray(system.jac_t).T)
+    reduced = basis.T @ system.dense() @ basis
+    return float(scipy.linalg.eigvalsh(reduced, subset_by_index=[0, 0])[0]) / props.segment_length
+
+
+def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> Result:
+    """The Result of a placement with contact completed: contacts per obstacle, the internal force (and the start
+    mount's reaction) with the contact loads, the stability margin with the barrier.  Raises PlacementError if
+    the hose enters anything (a smallest gap below zero): the solver's guarantee failed."""
+    problem = result.problem
+    result.contacts = contact_reports(problem, props, clamps, state, model)
+    gaps = [contact.min_gap for contact in result.contacts]
+    if gaps and min(gaps) < 0.0:
+        worst = result.contacts[int(np.argmin(gaps))]
+        raise PlacementError(f"placement with contact: the converged shape enters {worst.name!r} by {-worst.min_gap:.3g} mm; "
+                             "this is a solver error, please report it with the problem file")
+    result.internal_force = result.internal_force + contact_forces_beyond(props, clamps, state, model)
+    result.start_force = -result.internal_force[0]
+    result.stability_margin = stability_margin_with_contact(props, clamps, state, model)
+    return result
