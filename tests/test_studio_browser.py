@@ -4,6 +4,7 @@ file solved by the command line gives the shape shown, and a bad file is told an
 keeps a screenshot in out/studio/ for the record."""
 
 import os
+from contextlib import contextmanager
 import subprocess
 import sys
 from pathlib import Path
@@ -31,16 +32,33 @@ pytestmark = pytest.mark.skipif(
 
 
 @pytest.fixture(scope="module")
-def studio_page(tmp_path_factory):
+def browser():
+    """Headless chromium, shared by the pages of this module."""
+    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install playwright)")
+    with sync_api.sync_playwright() as playwright:
+        launched = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            yield launched
+        finally:
+            launched.close()
+
+
+@pytest.fixture(scope="module")
+def studio_page(browser, tmp_path_factory):
     """The studio on the demo sweep (thesis hose, 100 segments, a strut) open in chromium; the page,
     the console errors and every address the page asked for."""
-    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (pip install playwright)")
-    session = Session(sweep=demo_sweep(steps_per_degree=0.2))
+    with opened_page(browser, Session(sweep=demo_sweep(steps_per_degree=0.2)), tmp_path_factory.mktemp("studio")) as opened:
+        yield opened
+
+
+@contextmanager
+def opened_page(browser, session, folder):
+    """The studio on `session` open in a new page of `browser`: the page, the console errors and every address
+    it asked for."""
     errors, addresses = [], []
-    with in_background(session, tmp_path_factory.mktemp("studio")) as url, sync_api.sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+    with in_background(session, folder) as url:
+        page = browser.new_page(viewport={"width": 1400, "height": 900}, accept_downloads=True)
         try:
-            page = browser.new_page(viewport={"width": 1400, "height": 900}, accept_downloads=True)
             page.on("pageerror", lambda error: errors.append(f"page error: {error}"))
             page.on("console", lambda m: errors.append(f"console: {m.text}") if m.type == "error" else None)
             page.on("request", lambda request: addresses.append(request.url))
@@ -49,7 +67,7 @@ def studio_page(tmp_path_factory):
             page.wait_for_function("() => window.studio && window.studio.state !== null", timeout=30000)
             yield page, errors, addresses
         finally:
-            browser.close()
+            page.close()
 
 
 def drawn_after(page, action) -> dict:
@@ -236,3 +254,21 @@ def test_iges_mounts_under_other_labels_are_chosen_on_the_page(studio_page):
     refused = "no point labelled"
     errors[:] = [error for error in errors if refused not in error and "400" not in error]
     assert errors == []
+
+
+def test_clips_are_drawn_and_a_dragged_clip_moves_the_hose(browser, tmp_path):
+    from hoseline.demos.thesis_hose import demo_problem
+    from tests.test_studio_server import clipped_thesis_problem
+    problem = clipped_thesis_problem(demo_problem(180.0, segments=30))
+    with opened_page(browser, Session(problem), tmp_path) as (page, errors, _):
+        before = page.evaluate("() => window.studio.state")
+        drawn = page.evaluate("""() => ['clip0', 'clip1'].map((name) => window.studio.fittings.objects[name].position.toArray())""")
+        np.testing.assert_allclose(drawn, [clip["point"] for clip in before["clips"]], atol=1e-9)
+        assert page.locator('table.fittings tr[data-clip="1"]').count() == 2  # the rotating clip's point and direction
+        page.wait_for_function("() => document.getElementById('readouts').textContent.includes('clip sleeve (rotating)')")
+        state = drawn_after(page, lambda: page.evaluate("() => window.studio.fittings.drag('clip0', [0, 0, 5])"))
+        np.testing.assert_allclose(state["clips"][0]["point"], np.array(before["clips"][0]["point"]) + [0, 0, 5], atol=1e-9)
+        np.testing.assert_allclose(state["centerline"][10], state["clips"][0]["point"], atol=1e-9)  # the hose through it
+        assert np.max(np.abs(np.array(state["centerline"]) - np.array(before["centerline"]))) > 2.0
+        assert np.max(np.abs(drawn_centerline(page) - np.array(state["centerline"]))) < 1e-3
+        assert errors == []

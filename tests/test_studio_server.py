@@ -374,3 +374,82 @@ def test_a_problem_with_end_fittings_is_refused_until_the_page_can_edit_them(cli
     refused = client.post("/upload/fitted.toml", content=text.encode())
     assert refused.status_code == 400 and "does not take end fittings yet" in refused.json()["error"]
     assert "[fittings" not in client.get("/problem.toml").text  # the session is untouched
+
+
+def clipped_thesis_problem(problem):
+    """`problem` (the thesis hose, 30 segments) held by a fixed clip (station 10) and a rotating clip (station 20),
+    each a few mm off the unclipped shape, its tangent there as the clip direction."""
+    from hoseline.model.clips import Clip
+    shape, h = solve(problem, estimate_error=False).centerline, problem.hose.segment_length
+
+    def tangent(k):
+        t = shape[k + 1] - shape[k - 1]
+        return t / np.linalg.norm(t)
+
+    return replace(problem, clips=(Clip("fixed", shape[10] + [0.0, 0.0, 3.0], 10 * h, tangent(10), "bracket"),
+                                   Clip("rotating", shape[20] + [0.0, 2.0, 0.0], 20 * h, tangent(20), "sleeve")))
+
+
+@pytest.fixture(scope="module")
+def clipped(problem):
+    return clipped_thesis_problem(problem)
+
+
+def moved_clip(state, index, offset):
+    """A target moving clip `index` by `offset` (mm), the other clips and all orientations kept."""
+    clips = [{"point": c["point"], "quaternion": c["quaternion"]} for c in state["clips"]]
+    clips[index]["point"] = (np.array(clips[index]["point"]) + offset).tolist()
+    return {"type": "set", "clips": clips}
+
+
+def test_a_clip_drag_is_a_reversible_continuation_path_and_the_saved_file_holds_it(clipped, tmp_path):
+    placed = solve(clipped)
+    app = create_app(Session(clipped), tmp_path, allowed_hosts=HOSTS)
+    with TestClient(app) as client, client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        assert np.max(np.abs(np.array(state["centerline"]) - placed.centerline)) < 1e-9 * clipped.hose.length
+        assert [c["kind"] for c in state["clips"]] == ["fixed", "rotating"]
+        for shown, clip in zip(state["clips"], placed.clips):  # the clips' loads as the placement has them
+            np.testing.assert_allclose(shown["force"], clip.force, atol=1e-9 * np.linalg.norm(clip.force))
+            np.testing.assert_allclose(shown["moment"], clip.moment, atol=1e-9 * np.linalg.norm(clip.moment))
+        start = np.array(state["centerline"])
+        for k in range(1, 9):  # drag the fixed clip 8 mm up in steps of 1 mm
+            ws.send_json({**moved_clip(state, 0, [0.0, 0.0, float(k)]), "seq": k})
+            moved, _ = next_state(ws)
+            assert moved["seq"] == k
+        shape = np.array(moved["centerline"])
+        assert np.allclose(shape[10], np.array(state["clips"][0]["point"]) + [0.0, 0.0, 8.0], atol=1e-9)  # held there
+        assert np.allclose(shape[20], state["clips"][1]["point"], atol=1e-9)
+        assert np.max(np.linalg.norm(shape - start, axis=1)) > 4.0
+        assert abs(np.sum(np.linalg.norm(np.diff(shape, axis=0), axis=1)) - clipped.hose.length) < 1e-9
+        ws.send_json({**moved_clip(state, 0, [0.0, 0.0, 0.0]), "seq": 9})  # and back: the same equilibrium again
+        back, _ = next_state(ws)
+        assert np.max(np.abs(np.array(back["centerline"]) - start)) < 1e-6 * clipped.hose.length
+
+        ws.send_json({**moved_clip(state, 1, [0.0, 0.0, 5.0]), "seq": 10})  # the rotating clip, then place again
+        next_state(ws)
+        ws.send_json({"type": "place", "seq": 11})
+        shown, _ = next_state(ws)
+        assert shown["comparison"]["same"]
+        ws.send_json({"type": "set", "seq": 12, "clips": moved_clip(shown, 0, [0.0, 0.0, 0.0])["clips"][:1]})
+        refused, others = next_state(ws)  # not every clip: refused, the shape kept
+        assert "clips: 1 given" in others[0]["message"] and refused["centerline"] == shown["centerline"]
+        saved = problem_from_dict(tomllib.loads(client.get("/problem.toml").text))
+    np.testing.assert_allclose(saved.clips[1].point, np.array(state["clips"][1]["point"]) + [0.0, 0.0, 5.0], atol=1e-12)
+    assert [clip.arc_length for clip in saved.clips] == pytest.approx([clip.arc_length for clip in clipped.clips])
+    assert np.max(np.linalg.norm(solve(saved).centerline - np.array(shown["centerline"]), axis=1)) \
+        < 1e-6 * clipped.hose.length
+
+
+def test_clip_targets_are_checked_and_coalesce():
+    quaternion = [1.0, 0.0, 0.0, 0.0]
+    with pytest.raises(ValueError, match="clips.0.quaternion"):
+        parse_message(json.dumps({"type": "set", "seq": 1, "clips": [{"point": [0, 0, 0], "quaternion": [0, 0, 0, 0]}]}))
+    with pytest.raises(ValueError, match="clips.0.point"):
+        parse_message(json.dumps({"type": "set", "seq": 1, "clips": [{"point": [0, 0], "quaternion": quaternion}]}))
+    inbox = Inbox()
+    for k in range(3):
+        inbox.put(parse_message(json.dumps({"type": "set", "seq": k, "pose": 3} if k == 0 else
+                                           {"type": "set", "seq": k, "clips": [{"point": [k, 0, 0], "quaternion": quaternion}]})))
+    merged = asyncio.run(inbox.get(0.0))
+    assert merged.clips[0].point == [2.0, 0.0, 0.0] and merged.pose is None and inbox.coalesced == 2

@@ -124,3 +124,42 @@ def test_the_session_turns_a_twist_of_more_than_half_a_turn_the_way_it_goes(plac
     with pytest.raises(Exception):  # too short a hose: refused, and nothing changes
         typed.apply(Target(type="set", seq=2, twist=0.0, hose={"length": 100.0}))
     assert np.array_equal(typed.tracker.centerline, far) and typed.problem.end_twist_deg == 270.0
+
+
+@pytest.mark.parametrize("kind", ["fixed", "rotating", "sliding", "ball"])
+def test_the_tracker_holds_the_clips_as_the_placement_left_them(kind):
+    """A placement with a clip, taken over by the tracker: an equilibrium of its clamps (Newton stops at once),
+    the stations where the placement has them; a clip moved and back gives the same shape."""
+    from hoseline.model.clips import Clip
+    problem = demo_problem(180.0, segments=30)
+    shape, h = solve(problem, estimate_error=False).centerline, problem.hose.segment_length
+    tangent = (shape[16] - shape[14]) / np.linalg.norm(shape[16] - shape[14])
+    clip = Clip(kind, shape[15] + [0.0, 0.0, 3.0], 15 * h, None if kind == "ball" else tangent)
+    clipped = replace(problem, clips=(clip,))
+    placed = solve(clipped, estimate_error=False)
+    tracker = Tracker(clipped, placed)
+    assert np.max(np.abs(tracker.centerline - placed.centerline)) < 1e-9 * problem.hose.length
+    _, report = solve_equilibrium(tracker.props, tracker.clamps, tracker.state)
+    assert report.converged and report.iterations == 0
+    fittings = tracker.fittings
+    start = tracker.centerline
+    tracker.move(clipped, replace(fittings, clip_points=fittings.clip_points + [0.0, 0.0, 6.0]))
+    node = tracker.clamps.clips[0].node
+    assert np.allclose(tracker.centerline[node], fittings.clip_points[0] + [0.0, 0.0, 6.0], atol=1e-9)
+    tracker.move(clipped, fittings)
+    assert np.max(np.abs(tracker.centerline - start)) < 1e-6 * problem.hose.length
+
+
+def test_a_sweep_pose_moves_a_clip_with_its_body(tmp_path):
+    from test_sweep import SWEEP_TOML, sweep_folder
+
+    from hoseline.io.sweep_file import load_sweep
+    from hoseline.studio.messages import Target
+    from hoseline.studio.session import Session
+    clip = '\n[[clips]]\ntype = "rotating"\narc_length = 165.3\npoint = [-80.0, 40.0, -11.25]\ndirection = [-1.0, -0.3, 0.0]\n' \
+           'body = "knuckle"\n'
+    session = Session(sweep=load_sweep(sweep_folder(tmp_path, SWEEP_TOML + clip)))
+    session.apply(Target(type="set", seq=1, pose=2))  # the knuckle lifted 20 mm
+    held = session.fittings_at_zero_twist().clip_points[0]
+    np.testing.assert_allclose(held, [-80.0, 40.0, 8.75], atol=1e-12)
+    assert np.allclose(session.tracker.centerline[session.tracker.clamps.clips[0].node], held, atol=1e-9)

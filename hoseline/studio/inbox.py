@@ -51,6 +51,6 @@ def _merged(older: Target, newer: Target) -> Target:
         hose = older.hose.model_dump()
         hose.update({key: value for key, value in newer.hose.model_dump().items() if value is not None})
         fields["hose"] = hose
-    if newer.pose is None and (newer.start is not None or newer.end is not None):
-        fields["pose"] = None  # a fitting dragged after a sweep pose: the drag is the latest word
+    if newer.pose is None and (newer.start is not None or newer.end is not None or newer.clips is not None):
+        fields["pose"] = None  # a fitting or clip dragged after a sweep pose: the drag is the latest word
     return Target.model_validate(fields)

@@ -2,10 +2,13 @@
 
     {"type": "set", "seq": 7, "start": {"point": [x, y, z], "quaternion": [w, x, y, z]},
      "end": {...}, "twist": 180.0, "hose": {"length": 330.6, "bending_stiffness": ...,
-     "torsion_factor": 25.0, "mass_per_length": 0.1}, "pose": 12}
+     "torsion_factor": 25.0, "mass_per_length": 0.1}, "pose": 12,
+     "clips": [{"point": [x, y, z], "quaternion": [w, x, y, z]}, ...]}
         a target: every key but type and seq optional.  Fittings: the tip (mm) and the unit
         quaternion (scalar first) turning the world axes onto the fitting frame (d3 along the
-        hose; for the end fitting, without the twist).  twist: degrees at assembly.  hose: mm,
+        hose; for the end fitting, without the twist).  clips: every clip of the problem, in its
+        order, the same way (the point held, mm, and the clip frame, d3 along the hose; a ball
+        clip's orientation is not used).  twist: degrees at assembly.  hose: mm,
         N*mm^2, dimensionless, kg/m.  pose: a pose of the open sweep (the fittings follow its
         bodies).  Targets coalesce: only the latest is solved.
     {"type": "place", "seq": 8}     run the placement sequence again from the straight hose
@@ -27,6 +30,7 @@ import pydantic
 from pydantic import AfterValidator, BaseModel, ConfigDict
 
 MAX_MESSAGE_BYTES = 64 * 1024  # a target is a few hundred bytes
+MAX_CLIPS = 200  # clips in one target (a problem has a handful)
 
 
 class MessageError(ValueError):
@@ -80,6 +84,7 @@ class Target(_Message):
     twist: float | None = None
     hose: HoseTarget | None = None
     pose: int | None = None
+    clips: Annotated[list[FittingTarget], pydantic.Field(max_length=MAX_CLIPS)] | None = None
 
 
 class Command(_Message):

@@ -8,8 +8,11 @@ the page cannot make a problem that a file could not hold.
 
 The fittings: the start fitting's frame and the end fitting's frame at zero twist (the frame the
 placement locked, moved with the fitting since) are what the page drags; the end fitting is
-clamped at that frame turned by the twist at assembly.  A sweep's poses move the fittings from
-their design position, where the sweep was opened, as a sweep run does.
+clamped at that frame turned by the twist at assembly.  Clips are dragged the same way: each
+clip's point and frame as it holds the hose (a fixed clip keeps the roll locked at assembly,
+carried with its frame); the problem's clip keeps its arc length (on its station) and takes the
+dragged point and the frame's d3 as its direction.  A sweep's poses move the fittings and the
+clips riding on bodies from their design position, where the sweep was opened, as a sweep run does.
 
 Not thread-safe: the server calls it from one worker thread only.
 """
@@ -148,22 +151,31 @@ class Session:
         """
         twist = self.problem.end_twist_deg if target.twist is None else target.twist
         if target.pose is not None:
-            start_point, start_frame, end_point, end_base = self._pose_fittings(target.pose)
+            fittings = self._pose_fittings(target.pose)
         else:
             fittings = self.fittings_at_zero_twist()
-            start_point, start_frame, end_point, end_base = (
-                fittings.start_point, fittings.start_frame, fittings.end_point, fittings.end_frame)
             if target.start is not None:
-                start_point, start_frame = np.array(target.start.point), _frame(target.start.quaternion)
+                fittings = replace(fittings, start_point=np.array(target.start.point),
+                                   start_frame=_frame(target.start.quaternion))
             if target.end is not None:
-                end_point, end_base = np.array(target.end.point), _frame(target.end.quaternion)
+                fittings = replace(fittings, end_point=np.array(target.end.point), end_frame=_frame(target.end.quaternion))
+            if target.clips is not None:
+                if len(target.clips) != len(self.problem.clips):
+                    raise StudioError(f"clips: {len(target.clips)} given for the problem's {len(self.problem.clips)}: "
+                                      "give every clip's point and quaternion, in the problem's order")
+                fittings = replace(fittings, clip_points=np.array([c.point for c in target.clips]).reshape(-1, 3),
+                                   clip_frames=np.array([_frame(c.quaternion) for c in target.clips]).reshape(-1, 3, 3))
         data = problem_to_dict(self.problem)
-        data["start"] = {"point": start_point.tolist(), "direction": start_frame[2].tolist()}
-        data["end"] = {"point": end_point.tolist(), "direction": (-end_base[2]).tolist(), "twist": twist}
+        data["start"] = {"point": fittings.start_point.tolist(), "direction": fittings.start_frame[2].tolist()}
+        data["end"] = {"point": fittings.end_point.tolist(), "direction": (-fittings.end_frame[2]).tolist(), "twist": twist}
         if target.hose is not None:
             data["hose"] = _hose_section(data["hose"], self.problem, target.hose)
+        if self.problem.clips:
+            data["clips"] = self._clip_sections(data["clips"], data["hose"]["length"], fittings)
         problem = self._validated(data)
-        self.last_step = self._twist_to(problem, Fittings(problem.start.point, start_frame, problem.end.point, end_base))
+        end_base = fittings.end_frame
+        self.last_step = self._twist_to(problem, replace(fittings, start_point=problem.start.point,
+                                                         end_point=problem.end.point))
         self.problem, self.end_base = problem, end_base
         if target.pose is not None:
             self.pose_index = target.pose
@@ -244,16 +256,36 @@ class Session:
 
     # --- helpers ---
 
-    def _pose_fittings(self, index: int):
-        """Start tip, start frame, end tip and end frame at zero twist at sweep pose `index`."""
+    def _pose_fittings(self, index: int) -> Fittings:
+        """The fittings (end frame at zero twist) and clips at sweep pose `index`, moved with their bodies."""
         if self.sweep is None:
             raise StudioError("no sweep is open: the timeline needs a sweep file")
         if not 0 <= index < self.sweep.pose_count:
             raise StudioError(f"pose {index} is outside the sweep's 0..{self.sweep.pose_count - 1}")
-        start = self.sweep.pose(self.sweep.start_body, index)
-        end = self.sweep.pose(self.sweep.end_body, index)
-        return (start.point(self.design.start_point), start.frame(self.design.start_frame),
-                end.point(self.design.end_point), end.frame(self.design.end_frame))
+        sweep, design = self.sweep, self.design
+        start = sweep.pose(sweep.start_body, index)
+        end = sweep.pose(sweep.end_body, index)
+        clips = [sweep.pose(sweep.clip_body(j), index) for j in range(len(design.clip_points))]
+        return Fittings(start.point(design.start_point), start.frame(design.start_frame),
+                        end.point(design.end_point), end.frame(design.end_frame),
+                        np.array([pose.point(p) for pose, p in zip(clips, design.clip_points)]).reshape(-1, 3),
+                        np.array([pose.frame(f) for pose, f in zip(clips, design.clip_frames)]).reshape(-1, 3, 3))
+
+    def _clip_sections(self, sections: list[dict], length_mm: float, fittings: Fittings) -> list[dict]:
+        """The [[clips]] tables at the fittings' clip points and directions (d3 of their frames), each at the
+        same station of a hose `length_mm` long (a sliding clip's starting arc length scaled with the length)."""
+        holds, segments = self.tracker.clamps.clips, self.problem.hose.segments
+        tables = []
+        for section, hold, point, frame in zip(sections, holds, fittings.clip_points, fittings.clip_frames):
+            section = dict(section, point=point.tolist())
+            if "direction" in section:
+                section["direction"] = frame[2].tolist()
+            if hold.sliding:
+                section["arc_length"] = section["arc_length"] * length_mm / self.problem.hose.length
+            else:
+                section["arc_length"] = hold.node * length_mm / segments
+            tables.append(section)
+        return tables
 
     def _validated(self, data: dict) -> Problem:
         """The problem of a problem-file dict, checked as a file is (StudioError with the file's message)."""
@@ -265,12 +297,10 @@ class Session:
 
 def _editable(problem: Problem) -> None:
     """Refuse what the page cannot edit yet: the page drags the flexible hose's ends, so a problem
-    with rigid end fittings (ports and fittings, model/fittings.py) or clips would be moved wrongly."""
+    with rigid end fittings (ports and fittings, model/fittings.py) would be moved wrongly."""
     if problem.fittings is not None:
         raise StudioError("the studio does not take end fittings yet: remove [fittings.start] and [fittings.end] "
                           "(give the mounts at the fittings' outlets and the free length), or use hoseline solve")
-    if problem.clips:
-        raise StudioError("the studio does not take clips yet: remove the [[clips]] tables, or use hoseline solve")
 
 
 def _frame(quaternion: list[float]) -> np.ndarray:

@@ -1,4 +1,7 @@
-"""What the page is sent: the shape, the fittings, the colour-map data along the hose and the readouts.
+"""What the page is sent: the shape, the fittings and clips, the colour-map data along the hose and the readouts.
+
+A clip is sent with the frame it holds the hose by (what the page drags back: a rotating or
+sliding clip's roll found by the solve is not in it) and its load on the hose.
 
 Units as everywhere at the user boundary: mm, N, N*mm, degrees, kg/m.  Numbers that are not
 finite (the bend radius of a straight station) are sent as null, since JSON has no infinity.
@@ -44,6 +47,11 @@ def state_message(session: "Session") -> dict:
             "start": {"point": fittings.start_point.tolist(), "quaternion": _quaternion(fittings.start_frame)},
             "end": {"point": fittings.end_point.tolist(), "quaternion": _quaternion(fittings.end_frame)},
         },
+        "clips": [
+            {"kind": clip.kind, "name": clip.name, "point": point.tolist(), "quaternion": _quaternion(frame),
+             "arc_length": reaction.arc_length, "force": reaction.force.tolist(), "moment": reaction.moment.tolist()}
+            for clip, reaction, point, frame in zip(problem.clips, result.clips, fittings.clip_points, fittings.clip_frames)
+        ],
         "twist": problem.end_twist_deg,
         "hose": {
             "length": problem.hose.length,

@@ -15,18 +15,25 @@ equilibrium (a warm start), so a drag is a path, followed as the placement follo
 
 The end roll stays clamped: the twist locked at assembly moves with the end fitting.  A step
 that cannot be completed raises PlacementError and leaves the tracked equilibrium as it was.
+
+Clips (model/clips.py) are held as the placement left them (mechanics/rod.ClipHold, as a sweep
+holds them): each on its station, a fixed clip with the roll locked at assembly carried with its
+frame, rotating and sliding clips free to roll, a sliding clip's arc length an unknown of every
+step.  Moving a clip is a change of the fittings like any other: its point and frame are
+interpolated with the fittings' on a followed step.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from hoseline.mechanics.clipped_newton import station_positions
 from hoseline.mechanics.newton import RodProperties, node_positions, solve_equilibrium
-from hoseline.mechanics.rod import Clamps, RodState
+from hoseline.mechanics.rod import Clamps, ClipHold, RodState
 from hoseline.mechanics.rotations import rotation_matrix, rotation_vector
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.continuation import (
@@ -49,12 +56,19 @@ SMALLEST_PROPERTY_STEP = 1.0 / 64.0  # of a property change, before it is refuse
 
 @dataclass(frozen=True)
 class Fittings:
-    """Where the fittings hold the hose: tips (mm) and frames (rows d1, d2, d3; d3 along the hose)."""
+    """Where the fittings and clips hold the hose: tips (mm) and frames (rows d1, d2, d3; d3 along the hose).
+
+    clip_points (c, 3) mm and clip_frames (c, 3, 3): the clips in the problem's order, each frame
+    as the clip holds the hose (a fixed clip's locked roll included); a ball clip's frame only
+    orients what is drawn (it holds the position only).
+    """
 
     start_point: np.ndarray
     start_frame: np.ndarray
     end_point: np.ndarray
     end_frame: np.ndarray
+    clip_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    clip_frames: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
 
 
 @dataclass(frozen=True)
@@ -71,24 +85,34 @@ class Tracker:
     """The equilibrium of `problem`'s hose, starting from a placement `result`, carried through changes."""
 
     def __init__(self, problem: Problem, result: Result) -> None:
-        if problem.clips:  # the clamps below hold the two fittings only
-            raise ValueError("the tracker moves the two fittings only: a problem with clips cannot be tracked yet")
         self.problem = problem
         self.props = rod_properties(problem)
-        self.clamps = _clamps(problem, Fittings(problem.start.point, result.start_frame, problem.end.point, result.end_frame))
-        self.state = RodState(result.frames.copy(), result.end_force.copy(), 0.0)
+        # the clips as held at the end of the placement (the roll found folded into the frame: free rolls start at zero)
+        holds = tuple(
+            ClipHold(int(np.argmin(np.abs(result.s - clip.arc_length))), clip.point, clip.frame,
+                     clip.kind in ("rotating", "sliding"), clip.kind == "sliding")
+            for clip in result.clips
+        )
+        count = len(holds)
+        self.clamps = _clamps(problem, Fittings(problem.start.point, result.start_frame, problem.end.point,
+                                                result.end_frame, *_clip_arrays(holds)), holds)
+        self.state = RodState(result.frames.copy(), result.end_force.copy(), 0.0,
+                              np.array([clip.force for clip in result.clips]).reshape(count, 3), np.zeros(count),
+                              np.array([clip.arc_length for clip in result.clips]))
         self.residual = result.residual
         self.log = ContinuationLog()
 
     @property
     def fittings(self) -> Fittings:
-        """The fittings as they hold the hose now."""
+        """The fittings and clips as they hold the hose now."""
         c = self.clamps
-        return Fittings(c.start_point, c.start_frame, c.end_point, c.end_frame)
+        return Fittings(c.start_point, c.start_frame, c.end_point, c.end_frame, *_clip_arrays(c.clips))
 
     @property
     def centerline(self) -> np.ndarray:
         """(N+1, 3) station positions, mm."""
+        if self.clamps.clips:  # a sliding clip stretches the spans next to it
+            return station_positions(self.props, self.clamps, self.state)[1]
         return node_positions(self.props, self.clamps, self.state)
 
     def move(self, problem: Problem, fittings: Fittings) -> Step:
@@ -101,7 +125,9 @@ class Tracker:
         props = rod_properties(problem)
         if props.segments != self.props.segments:
             raise ValueError("the segment count changed: place the hose again")
-        clamps = _clamps(problem, fittings)
+        if len(fittings.clip_points) != len(self.clamps.clips):
+            raise ValueError(f"{len(fittings.clip_points)} clip positions for {len(self.clamps.clips)} clips")
+        clamps = _clamps(problem, fittings, self.clamps.clips)
         before = self.centerline
         logged, counted = len(self.log.events), self.log.iterations
         state = self.state
@@ -129,7 +155,7 @@ class Tracker:
         trial, report = solve_equilibrium(props, new, state)
         self.log.iterations += report.iterations
         if report.converged:
-            moved = np.max(np.linalg.norm(node_positions(props, new, trial) - node_positions(props, old, state), axis=1))
+            moved = np.max(np.linalg.norm(_stations(props, new, trial) - _stations(props, old, state), axis=1))
             if report.unstable_directions == 0 and moved <= _jump_limit(old, new, props.length):
                 self.residual = report.residual
                 return trial
@@ -177,8 +203,9 @@ def twisted(frame: np.ndarray, twist_deg: float) -> np.ndarray:
     return frame @ rotation_matrix(-frame[2] * math.radians(twist_deg)).T
 
 
-def _clamps(problem: Problem, fittings: Fittings) -> Clamps:
-    """The clamps of the fittings, both ends locked, with the problem's weight."""
+def _clamps(problem: Problem, fittings: Fittings, holds: tuple[ClipHold, ...]) -> Clamps:
+    """The clamps of the fittings, both ends locked, with the problem's weight; the clips `holds` moved to the
+    fittings' clip points and frames."""
     return Clamps(
         start_point=np.asarray(fittings.start_point, dtype=float),
         start_frame=np.asarray(fittings.start_frame, dtype=float),
@@ -186,7 +213,23 @@ def _clamps(problem: Problem, fittings: Fittings) -> Clamps:
         end_frame=np.asarray(fittings.end_frame, dtype=float),
         roll_free=False,
         line_weight=weight_vector(problem),
+        clips=tuple(
+            replace(hold, point=np.array(point, dtype=float), frame=None if hold.frame is None else np.array(frame, dtype=float))
+            for hold, point, frame in zip(holds, fittings.clip_points, fittings.clip_frames)
+        ),
     )
+
+
+def _clip_arrays(holds: tuple[ClipHold, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Points (c, 3) mm and frames (c, 3, 3) of clips (the identity for a ball clip, which has none)."""
+    points = np.array([hold.point for hold in holds], dtype=float).reshape(-1, 3)
+    frames = np.array([np.eye(3) if hold.frame is None else hold.frame for hold in holds], dtype=float).reshape(-1, 3, 3)
+    return points, frames
+
+
+def _stations(props: RodProperties, clamps: Clamps, state: RodState) -> np.ndarray:
+    """(N+1, 3) station positions, mm (each segment of its own length where sliding clips stretch their spans)."""
+    return station_positions(props, clamps, state)[1] if clamps.clips else node_positions(props, clamps, state)
 
 
 def _interpolate(a: Clamps, b: Clamps, t: float) -> Clamps:
@@ -202,6 +245,11 @@ def _interpolate(a: Clamps, b: Clamps, t: float) -> Clamps:
         end_frame=frame(a.end_frame, b.end_frame),
         roll_free=False,
         line_weight=(1.0 - t) * a.line_weight + t * b.line_weight,
+        clips=tuple(
+            replace(ca, point=(1.0 - t) * ca.point + t * cb.point,
+                    frame=None if ca.frame is None else frame(ca.frame, cb.frame))
+            for ca, cb in zip(a.clips, b.clips)
+        ),
     )
 
 
@@ -211,12 +259,16 @@ def _jump_limit(old: Clamps, new: Clamps, length: float) -> float:
     for point_a, point_b, frame_a, frame_b in (
         (old.start_point, new.start_point, old.start_frame, new.start_frame),
         (old.end_point, new.end_point, old.end_frame, new.end_frame),
-    ):
+    ) + tuple((a.point, b.point, _frame_or_identity(a), _frame_or_identity(b)) for a, b in zip(old.clips, new.clips)):
         angle = float(np.linalg.norm(rotation_vector(frame_b.T @ frame_a)))
         moves.append(float(np.linalg.norm(point_b - point_a)) + length * angle)
     weight_change = float(np.linalg.norm(new.line_weight - old.line_weight) / max(np.linalg.norm(old.line_weight), 1e-300))
     allowance = length * min(weight_change, 1.0)  # a change of weight may move the hose by up to its length
     return JUMP_FACTOR * max(moves) + allowance + 1e-6 * length
+
+
+def _frame_or_identity(hold: ClipHold) -> np.ndarray:
+    return np.eye(3) if hold.frame is None else hold.frame
 
 
 def _same_properties(a: RodProperties, b: RodProperties) -> bool:

@@ -1,10 +1,12 @@
-// The two fittings: each an object whose axes are the fitting frame (x = d1, y = d2, z = d3 along the
-// hose; the end fitting without its twist), drawn as a short body behind the tip with its frame.
-// A TransformControls gizmo moves or turns the selected one; every change of it is a drag event.
+// The two fittings and the clips: each an object whose axes are its frame (x = d1, y = d2, z = d3 along
+// the hose; the end fitting without its twist), a fitting drawn as a short body behind the tip, a clip
+// as a ring round the hose at its point (a ball clip, which holds the position only, as a sphere).
+// Objects are kept by name ('start', 'end', 'clip0', 'clip1', ...).  A TransformControls gizmo moves or
+// turns the selected one; every change of it is a drag event.
 import * as THREE from 'three';
 import { TransformControls } from 'three/addons/controls/TransformControls.js';
 
-const COLOURS = { start: 0x2f7bd8, end: 0xd84f2f };
+const COLOURS = { start: 0x2f7bd8, end: 0xd84f2f, clip: 0x8a5cc2 };
 
 export class FittingsView {
   /** onDrag(name, object): the fitting `name` was moved by the gizmo (or by drag()). */
@@ -35,9 +37,31 @@ export class FittingsView {
     this.selected = null;
   }
 
-  /** Size the fitting bodies to the hose (outer diameter, mm); called when a session starts. */
-  build(outerDiameter) {
-    for (const [name, object] of Object.entries(this.objects)) {
+  /** Size the fitting bodies to the hose (outer diameter, mm) and make one object per clip of a state
+   * message's `clips` (kind 'ball' a sphere, the others a ring); called when a session starts. */
+  build(outerDiameter, clips = []) {
+    for (const name of Object.keys(this.objects).filter((key) => key.startsWith('clip'))) {
+      this.group.remove(this.objects[name]);
+      delete this.objects[name];
+    }
+    if (this.selected && !this.objects[this.selected]) this.select(null);
+    clips.forEach((clip, k) => {
+      const object = new THREE.Group();
+      object.name = `clip ${k}${clip.name ? ` ${clip.name}` : ''}`;
+      const material = new THREE.MeshStandardMaterial({ color: COLOURS.clip, roughness: 0.5, metalness: 0.2 });
+      const shape = clip.kind === 'ball'
+        ? new THREE.SphereGeometry(0.9 * outerDiameter, 24, 16)
+        : new THREE.TorusGeometry(0.8 * outerDiameter, 0.25 * outerDiameter, 12, 32);  // in the xy plane: round d3
+      const body = new THREE.Mesh(shape, material);
+      body.name = `clip ${k} body`;
+      if (clip.kind === 'ball') { material.transparent = true; material.opacity = 0.45; }
+      object.add(body);
+      if (clip.kind !== 'ball') object.add(new THREE.AxesHelper(2.5 * outerDiameter));
+      this.objects[`clip${k}`] = object;
+      this.group.add(object);
+    });
+    for (const name of ['start', 'end']) {
+      const object = this.objects[name];
       object.clear();
       const sign = name === 'start' ? -1 : 1;  // the fitting lies behind the tip: before the start, after the end
       const length = 3 * outerDiameter;
@@ -50,9 +74,11 @@ export class FittingsView {
     }
   }
 
-  /** Put the fittings where a state message has them, except one the user is dragging. */
-  place(fittings) {
-    for (const [name, fitting] of Object.entries(fittings)) {
+  /** Put the fittings and clips where a state message has them, except one the user is dragging. */
+  place(fittings, clips = []) {
+    const all = { ...fittings, ...Object.fromEntries(clips.map((clip, k) => [`clip${k}`, clip])) };
+    for (const [name, fitting] of Object.entries(all)) {
+      if (!this.objects[name]) continue;
       if (this.dragging && name === this.selected) continue;
       const [w, x, y, z] = fitting.quaternion;
       this.objects[name].position.fromArray(fitting.point);
@@ -60,7 +86,19 @@ export class FittingsView {
     }
   }
 
-  /** Attach the gizmo to 'start', 'end' or nothing (null); mode 'translate' or 'rotate'. */
+  /** The clips' targets for the server, in the problem's order. */
+  clipTargets() {
+    return Object.keys(this.objects).filter((name) => name.startsWith('clip'))
+      .sort((a, b) => Number(a.slice(4)) - Number(b.slice(4))).map((name) => FittingsView.target(this.objects[name]));
+  }
+
+  /** The name of the fitting or clip an object drawn belongs to (null: none). */
+  nameOf(object) {
+    while (object && object.parent !== this.group) object = object.parent;
+    return Object.keys(this.objects).find((name) => this.objects[name] === object) || null;
+  }
+
+  /** Attach the gizmo to 'start', 'end', a clip ('clip0', ...) or nothing (null); mode 'translate' or 'rotate'. */
   select(name, mode) {
     if (mode) this.gizmo.setMode(mode);
     this.selected = name;
@@ -78,7 +116,8 @@ export class FittingsView {
     this.onDrag(name, object);
   }
 
-  /** Set fitting `name` to a typed tip (mm) or direction (from the fitting into the hose), turning it the least. */
+  /** Set fitting or clip `name` to a typed tip (mm) or direction (from the fitting into the hose; a clip's along
+   * the hose), turning it the least. */
   setTyped(name, field, values) {
     const object = this.objects[name];
     if (field === 'point') {

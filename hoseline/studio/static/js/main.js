@@ -13,7 +13,8 @@ const view = document.getElementById('view');
 const studioScene = new StudioScene(view);
 const hose = new HoseView(studioScene.scene);
 const obstacles = new ObstacleView(studioScene.scene);
-const fittings = new FittingsView(studioScene, (name, object) => send({ type: 'set', [name]: FittingsView.target(object) }));
+const fittings = new FittingsView(studioScene, (name, object) => send(name.startsWith('clip')
+  ? { type: 'set', clips: fittings.clipTargets() } : { type: 'set', [name]: FittingsView.target(object) }));
 let session = null, state = null, starting = true, playing = false;
 const drawnWaiters = [];  // [seq, resolve] waiting for a state at or past seq to be drawn
 const latencies = [];  // ms from a user's event to the shape drawn, one per event
@@ -30,7 +31,7 @@ const panel = new Panel({
   runSweep,
 });
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
-fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings); };
+fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
 
 function send(message) {
   return connection.send(message);
@@ -55,12 +56,13 @@ function receive(message) {
 function draw(message) {
   state = message;
   if (starting) {
-    fittings.build(message.hose.outer_diameter);
+    fittings.build(message.hose.outer_diameter, message.clips);
     panel.start(session, message);
+    markActive();
   }
   paint();
   obstacles.place(message.obstacle_poses);
-  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq) fittings.place(message.fittings);
+  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq) fittings.place(message.fittings, message.clips);
   if (starting) { fitView(); starting = false; }
   studioScene.render();
   const drawnAt = performance.now();
@@ -183,9 +185,7 @@ studioScene.renderer.domElement.addEventListener('pointerdown', (event) => {
   raycaster.setFromCamera(pointer, studioScene.camera);
   const hit = raycaster.intersectObjects(fittings.group.children, true)[0];
   if (!hit) return;
-  let object = hit.object;
-  while (object.parent !== fittings.group) object = object.parent;
-  fittings.select(object === fittings.objects.start ? 'start' : 'end');
+  fittings.select(fittings.nameOf(hit.object));
   markActive();
 });
 

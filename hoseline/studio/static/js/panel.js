@@ -51,15 +51,7 @@ export class Panel {
         if (Number.isFinite(value)) on.slider(key, value); else this.message(`${key}: not a number`, true);
       });
     }
-    for (const row of document.querySelectorAll('table.fittings tr[data-fitting]')) {
-      for (const input of row.querySelectorAll('input')) {
-        input.addEventListener('change', () => {
-          const values = [...row.querySelectorAll('input')].map((i) => Number(i.value));
-          if (values.every(Number.isFinite)) on.typed(row.dataset.fitting, row.dataset.field, values);
-          else this.message('give three numbers', true);
-        });
-      }
-    }
+    for (const row of document.querySelectorAll('table.fittings tr[data-fitting]')) this.typedRow(row);
     const segments = document.getElementById('segments');
     segments.addEventListener('change', () => {
       const count = Number(segments.value);
@@ -73,8 +65,41 @@ export class Panel {
     document.getElementById('open').addEventListener('change', (event) => on.files(event.target.files));
   }
 
+  /** Send the values typed in a row of the fittings table (three numbers) as a fitting's or clip's tip or direction. */
+  typedRow(row) {
+    for (const input of row.querySelectorAll('input')) {
+      input.addEventListener('change', () => {
+        const values = [...row.querySelectorAll('input')].map((i) => Number(i.value));
+        if (values.every(Number.isFinite)) this.on.typed(row.dataset.fitting, row.dataset.field, values);
+        else this.message('give three numbers', true);
+      });
+    }
+  }
+
+  /** Rows of the fittings table for the clips: the point (mm) and, for a clip that holds it, the direction. */
+  clipRows(clips) {
+    const table = document.querySelector('table.fittings');
+    table.querySelectorAll('tr[data-clip]').forEach((row) => row.remove());
+    clips.forEach((clip, k) => {
+      for (const field of clip.kind === 'ball' ? ['point'] : ['point', 'direction']) {
+        const row = document.createElement('tr');
+        Object.assign(row.dataset, { fitting: `clip${k}`, field, clip: k });
+        const label = document.createElement('th');
+        label.textContent = `clip ${clip.name || k + 1} (${clip.kind}) ${field === 'point' ? 'point, mm' : 'direction'}`;
+        row.append(label, ...[0, 1, 2].map(() => {
+          const cell = document.createElement('td');
+          cell.append(Object.assign(document.createElement('input'), { type: 'number', step: 'any' }));
+          return cell;
+        }));
+        table.append(row);
+        this.typedRow(row);
+      }
+    });
+  }
+
   /** A new session: slider ranges round its values, the timeline for its sweep. */
   start(session, state) {
+    this.clipRows(state.clips);
     this.scales = ranges(state);
     document.getElementById('problem-name').textContent = session.name;
     const timeline = document.getElementById('timeline');
@@ -127,7 +152,8 @@ export class Panel {
       if (near && document.activeElement !== input) input.value = exact(near.required);
     }
     for (const row of document.querySelectorAll('table.fittings tr[data-fitting]')) {
-      const fitting = state.fittings[row.dataset.fitting];
+      const fitting = row.dataset.clip === undefined ? state.fittings[row.dataset.fitting] : state.clips[Number(row.dataset.clip)];
+      if (!fitting) continue;
       const values = row.dataset.field === 'point' ? fitting.point : direction(row.dataset.fitting, fitting.quaternion);
       row.querySelectorAll('input').forEach((input, k) => {
         if (document.activeElement !== input) input.value = exact(values[k]);
@@ -153,6 +179,8 @@ export class Panel {
       limit ? r.min_bend_radius === null || r.min_bend_radius >= limit : null]);
     rows.push(['start reaction', [vector(r.start_force, 'N'), vector(r.start_moment, 'N·mm')], null]);
     rows.push(['end reaction', [vector(r.end_force, 'N'), vector(r.end_moment, 'N·mm')], null]);
+    state.clips.forEach((clip, k) => rows.push([`clip ${clip.name || k + 1} (${clip.kind})`,
+      [vector(clip.force, 'N'), ...(clip.kind === 'ball' ? [] : [vector(clip.moment, 'N·mm')]), `at s = ${fmt(clip.arc_length)} mm`], null]));
     rows.push(['max twisting moment', `${fmt(r.max_twisting_moment)} N·mm`, null]);
     rows.push(['lock angle (placement)', `${fmt(r.lock_angle)}°`, null]);
     rows.push(['single-plane offset', r.single_plane_offset === null ? 'undefined (parallel directions)' : `${fmt(r.single_plane_offset)} mm`, null]);
@@ -223,7 +251,7 @@ export class Panel {
   }
 }
 
-/** The direction from a fitting into the hose: d3 of the start frame, -d3 of the end frame. */
+/** The direction from a fitting into the hose: d3 of the start frame (and of a clip's: along the hose), -d3 of the end frame. */
 function direction(name, [w, x, y, z]) {
   const d3 = [2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)];
   return name === 'end' ? d3.map((v) => -v) : d3;
