@@ -14,9 +14,7 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -26,23 +24,14 @@ for variable in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from timing import median_time  # noqa: E402
 from hoseline.demos.thesis_hose import demo_problem  # noqa: E402
 from hoseline.mechanics.newton import _step_kernel, evaluate  # noqa: E402
 from hoseline.mechanics.rod import RodState  # noqa: E402
 from hoseline.model.clips import Clip  # noqa: E402
 from hoseline.procedures.placement.sequence import PlacementPath, rod_properties, solve  # noqa: E402
-
-
-def median_time(call, repeats: int) -> float:
-    """Median wall time of call() in seconds over `repeats` runs (after one warm-up run)."""
-    call()
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - started)
-    return statistics.median(times)
 
 
 def iteration_time(problem, result, repeats: int) -> float:

@@ -18,9 +18,7 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -30,9 +28,11 @@ for variable in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from threadpoolctl import threadpool_limits  # noqa: E402
 
+from timing import median_time  # noqa: E402
 from hoseline.mechanics.contact_newton import _kkt_step, evaluate_contact, solve_with_contact  # noqa: E402
 from hoseline.mechanics.contact_solve import dense_step, kkt_solves  # noqa: E402
 from hoseline.mechanics.newton import solve_equilibrium  # noqa: E402
@@ -44,17 +44,6 @@ from hoseline.procedures.contact.continuation import follow_contact  # noqa: E40
 from hoseline.procedures.contact.model import contact_model, reference_pressure  # noqa: E402
 from hoseline.procedures.placement.continuation import ContinuationLog, follow  # noqa: E402
 from hoseline.procedures.placement.sequence import place_only  # noqa: E402
-
-
-def median_time(call, repeats: int) -> float:
-    """Median wall time of call() in seconds over `repeats` runs (after one warm-up run)."""
-    call()
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - started)
-    return statistics.median(times)
 
 
 def main() -> None:

@@ -238,3 +238,15 @@ def banded_matvec(band, x):
                 value += band[i + k, k] * columns[i + k, j]
             out[i, j] = value
     return out.reshape(x.shape)
+
+
+def band_to_dense(band: np.ndarray) -> np.ndarray:
+    """The full symmetric matrix (n, n) of a lower band (n, width), row k of the band holding the
+    diagonals below it (for checks and small dense solves; the solver itself never forms it)."""
+    n, width = band.shape
+    dense = np.zeros((n, n))
+    for k in range(width):
+        idx = np.arange(k, n)
+        dense[idx, idx - k] = band[k:, k]
+        dense[idx - k, idx] = band[k:, k]
+    return dense

@@ -344,10 +344,10 @@ def smallest_sliding_eigenvalue(system: SlidingSystem, segment_length: float) ->
     arc-length columns are dense; a sliding clip's hose is a few hundred unknowns (milliseconds)."""
     import scipy.linalg
 
-    from hoseline.mechanics.stability import _band_to_dense
+    from hoseline.mechanics.banded import band_to_dense
 
     h = segment_length
-    hess = np.block([[_band_to_dense(system.band), h * system.mixed],
+    hess = np.block([[band_to_dense(system.band), h * system.mixed],
                      [h * system.mixed.T, h * h * system.stretch_hessian]])
     basis = scipy.linalg.null_space(np.hstack([system.jac_t.T, h * system.stretch_jac]))
     return float(np.linalg.eigvalsh(basis.T @ hess @ basis)[0])

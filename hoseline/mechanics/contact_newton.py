@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from hoseline.mechanics.banded import band_to_dense
 from hoseline.mechanics.clipped import unknown_layout
 from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
 from hoseline.mechanics.contact import (
@@ -131,7 +132,7 @@ class ContactSystem:
     def dense(self) -> np.ndarray:
         """The Hessian (n, n) assembled dense: the rod's band and contact.rotation_terms (suffix sums, O(N^2))."""
         rod_band, frames, h, node_grad, node_hess, index = self.stations
-        hess = _dense(rod_band)
+        hess = band_to_dense(rod_band)
         if index is not None:
             rows = (index[:, None] + np.arange(3)[None, :]).reshape(-1)
             hess[np.ix_(rows, rows)] += rotation_terms(frames, h, node_grad, node_hess)[1]
@@ -144,16 +145,6 @@ def rotation_index(props: RodProperties, clamps: Clamps, state: RodState) -> np.
         return 3 * np.arange(props.segments)
     nodes, _, _, _, roll_free = clip_arrays(clamps, state)
     return unknown_layout(props.segments, nodes, roll_free, clamps.roll_free)[0]
-
-
-def _dense(band: np.ndarray) -> np.ndarray:
-    n, width = band.shape
-    out = np.zeros((n, n))
-    for k in range(width):
-        rows = np.arange(k, n)
-        out[rows, rows - k] = band[k:, k]
-        out[rows - k, rows] = band[k:, k]
-    return out
 
 
 def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> ContactSystem:

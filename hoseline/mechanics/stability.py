@@ -15,23 +15,13 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-from hoseline.mechanics.banded import banded_matvec, kkt_solve, ldlt_banded, ldlt_solve
+from hoseline.mechanics.banded import band_to_dense, banded_matvec, kkt_solve, ldlt_banded, ldlt_solve
 from hoseline.mechanics.bordered import kkt_solve_bordered
-
-
-def _band_to_dense(band: np.ndarray) -> np.ndarray:
-    n, width = band.shape
-    dense = np.zeros((n, n))
-    for k in range(width):
-        idx = np.arange(k, n)
-        dense[idx, idx - k] = band[k:, k]
-        dense[idx - k, idx] = band[k:, k]
-    return dense
 
 
 def _dense_pairs(band: np.ndarray, jac_t: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
     basis = scipy.linalg.null_space(jac_t.T)
-    reduced = basis.T @ _band_to_dense(band) @ basis
+    reduced = basis.T @ band_to_dense(band) @ basis
     values, vectors = scipy.linalg.eigh(reduced, subset_by_index=[0, count - 1])
     return values, basis @ vectors
 
