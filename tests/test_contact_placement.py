@@ -99,14 +99,13 @@ def test_a_start_inside_an_obstacle_is_refused_naming_it():
     assert "'ball'" in str(error.value) and "straight hose" in str(error.value)
 
 
-def test_a_sweep_file_with_contact_is_refused():
-    from hoseline.io.sweep_file import SweepFileError, sweep_from_dict
+def test_a_sweep_file_takes_contact():  # the sweep itself: tests/test_sweep_contact.py
+    from hoseline.io.sweep_file import sweep_from_dict
 
     data = with_contact({"obstacles": [DRUM]}) | {
         "end": dict(BASE["end"], body="arm"),
         "bodies": [{"name": "arm", "stages": [{"name": "lift", "translate": [0.0, 5.0], "axis": [0, 0, 1], "steps": 2}]}]}
-    with pytest.raises(SweepFileError, match=r"\[contact\]: a sweep does not take contact yet"):
-        sweep_from_dict(data)
+    assert [obstacle.name for obstacle in sweep_from_dict(data).problem.contact] == ["drum"]
 
 
 def test_self_contact_is_reported_with_the_obstacles():

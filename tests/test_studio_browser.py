@@ -272,3 +272,28 @@ def test_clips_are_drawn_and_a_dragged_clip_moves_the_hose(browser, tmp_path):
         assert np.max(np.abs(np.array(state["centerline"]) - np.array(before["centerline"]))) > 2.0
         assert np.max(np.abs(drawn_centerline(page) - np.array(state["centerline"]))) < 1e-3
         assert errors == []
+
+
+def test_end_fittings_are_drawn_as_rigid_pieces_carried_by_their_ports(browser, tmp_path):
+    from hoseline.demos.thesis_hose import demo_problem
+    from tests.test_studio_server import fitted_thesis_problem
+    problem = fitted_thesis_problem(demo_problem(180.0, segments=30))
+    outlet_drawn = """() => { const object = window.studio.fittings.objects.end;  // the end piece's last point, in the world
+        object.updateMatrixWorld(true);
+        const piece = object.getObjectByName('end fitting piece');
+        const points = window.studio.state.pieces.end.centreline;
+        return new piece.position.constructor(...points[points.length - 1]).applyMatrix4(object.matrixWorld).toArray(); }"""
+    with opened_page(browser, Session(problem), tmp_path) as (page, errors, _):
+        meshes = page.evaluate("""() => ['start', 'end'].map((name) => {
+            let count = 0;
+            window.studio.fittings.objects[name].traverse((o) => { if (o.isMesh && o.name.includes('fitting piece')) count++; });
+            return count; })""")
+        assert meshes == [1, 1]  # a tube each (the elbow's bend is rounded: no corner ball)
+        state = page.evaluate("() => window.studio.state")
+        np.testing.assert_allclose(page.evaluate(outlet_drawn), state["centerline"][-1], atol=1e-6)
+        page.wait_for_function("() => document.getElementById('readouts').textContent.includes('overall 375.6 mm')")
+        state = drawn_after(page, lambda: page.evaluate("() => window.studio.fittings.drag('end', [0, 3, 0], 1, 8)"))
+        np.testing.assert_allclose(state["fittings"]["end"]["point"], np.array(problem.fittings.end_port.point) + [0, 3, 0],
+                                   atol=1e-9)
+        np.testing.assert_allclose(page.evaluate(outlet_drawn), state["centerline"][-1], atol=1e-6)  # the hose at the piece
+        assert errors == []

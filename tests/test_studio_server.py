@@ -13,7 +13,8 @@ from starlette.testclient import TestClient
 
 from hoseline.demos.sweep import demo_sweep
 from hoseline.demos.thesis_hose import THESIS_MOUNTS_IGES, demo_problem
-from hoseline.io.problem_file import problem_from_dict, problem_to_toml
+from hoseline.io.problem_file import problem_from_dict, problem_to_dict, problem_to_toml
+from hoseline.model.motion import axis_angle_matrix, matrix_quaternion, quaternion_matrix
 from hoseline.procedures.placement.sequence import solve
 from hoseline.studio.inbox import Inbox
 from hoseline.studio.messages import parse_message
@@ -369,11 +370,71 @@ def test_an_iges_file_without_the_thesis_labels_offers_its_labels_and_takes_the_
     np.testing.assert_allclose(placed.end.direction, end.direction)
 
 
-def test_a_problem_with_end_fittings_is_refused_until_the_page_can_edit_them(client, problem):
-    text = problem_to_toml(problem) + "\n[fittings.start]\nlength = 20.0\n"
-    refused = client.post("/upload/fitted.toml", content=text.encode())
-    assert refused.status_code == 400 and "does not take end fittings yet" in refused.json()["error"]
-    assert "[fittings" not in client.get("/problem.toml").text  # the session is untouched
+def fitted_thesis_problem(problem):
+    """`problem` (the thesis hose) with a straight fitting at the start and a clocked 90 degree elbow at the end,
+    its mounts now the ports and its length the free length."""
+    data = problem_to_dict(problem)
+    data["fittings"] = {"start": {"length": 20.0},
+                        "end": {"length": 25.0, "bend_angle": 90.0, "outlet_length": 25.0, "bend_radius": 10.0,
+                                "clocking": 30.0, "reference": [0.0, 0.0, 1.0]}}
+    return problem_from_dict(data)
+
+
+def turned_port(port, rotation, offset):
+    """A target for a port (state["fittings"][...]) turned by the world `rotation` about its point and moved by `offset`."""
+    frame = quaternion_matrix(port["quaternion"]).T @ rotation.T
+    return {"point": (np.array(port["point"]) + offset).tolist(), "quaternion": matrix_quaternion(frame.T).tolist()}
+
+
+def test_end_fittings_are_dragged_by_their_ports_and_carry_the_outlets_rigidly(problem, tmp_path):
+    fitted = fitted_thesis_problem(problem)
+    length = fitted.hose.length
+    session = Session(fitted)
+    clamped = session.fittings_at_zero_twist().end_frame  # the end outlet's frame as the flexible hose is held there
+    app = create_app(session, tmp_path, allowed_hosts=HOSTS)
+    with TestClient(app) as client, client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        assert np.max(np.abs(np.array(state["centerline"]) - solve(fitted).centerline)) < 1e-9 * length
+        port = state["fittings"]["end"]  # the page is given the ports and the fittings as rigid pieces
+        np.testing.assert_allclose(port["point"], fitted.fittings.end_port.point)
+        np.testing.assert_allclose(quaternion_matrix(port["quaternion"])[:, 2], -fitted.fittings.end_port.direction,
+                                   atol=1e-12)
+        np.testing.assert_allclose(state["fittings"]["start"]["point"], fitted.fittings.start_port.point)
+        assert set(state["pieces"]) == {"start", "end"}
+        assert state["readouts"]["overall_length"] == pytest.approx(length + 20.0 + 25.0)
+        assert state["readouts"]["free_length"] == length
+
+        # the end port turned by 12 degrees about a tilted axis and moved 6 mm, in 6 drag events
+        axis, offset = np.array([0.3, 0.2, 1.0]) / np.linalg.norm([0.3, 0.2, 1.0]), np.array([0.0, 3.0, -5.2])
+        for k in range(1, 7):
+            ws.send_json({"type": "set", "seq": k, "end": turned_port(port, axis_angle_matrix(axis, np.radians(2.0 * k)),
+                                                                      offset * k / 6)})
+            moved, _ = next_state(ws)
+        turn = axis_angle_matrix(axis, np.radians(12.0))
+        outlet = fitted.end.point - fitted.fittings.end_port.point
+        shape = np.array(moved["centerline"])
+        np.testing.assert_allclose(shape[-1], fitted.fittings.end_port.point + offset + turn @ outlet, atol=1e-9)
+        np.testing.assert_allclose(shape[0], fitted.start.point, atol=1e-9)  # the start fitting stays
+        assert np.max(np.linalg.norm(shape - np.array(state["centerline"]), axis=1)) > 5.0  # the hose follows
+        assert abs(np.sum(np.linalg.norm(np.diff(shape, axis=0), axis=1)) - length) < 1e-9
+        saved = problem_from_dict(tomllib.loads(client.get("/problem.toml").text))
+        np.testing.assert_allclose(saved.fittings.end_port.point, fitted.fittings.end_port.point + offset, atol=1e-12)
+        np.testing.assert_allclose(saved.end.point, shape[-1], atol=1e-9)  # the file's outlet is the one shown
+        np.testing.assert_allclose(saved.end.direction, turn @ fitted.end.direction, atol=1e-9)
+        np.testing.assert_allclose(saved.fittings.end.reference, turn @ fitted.fittings.end.reference, atol=1e-12)
+        np.testing.assert_allclose(session.fittings_at_zero_twist().end_frame, clamped @ turn.T, atol=1e-9)  # rigidly
+
+        ws.send_json({"type": "set", "seq": 7, "end": port})  # and back: the same equilibrium again
+        back, _ = next_state(ws)
+        assert np.max(np.abs(np.array(back["centerline"]) - np.array(state["centerline"]))) < 1e-6 * length
+
+        ws.send_json({"type": "set", "seq": 8, "end": turned_port(port, turn, offset)})  # there again, then place again
+        next_state(ws)
+        ws.send_json({"type": "place", "seq": 9})
+        shown, _ = next_state(ws)
+        saved = problem_from_dict(tomllib.loads(client.get("/problem.toml").text))
+    assert saved.fittings.end.clocking_deg == 30.0 and saved.fittings.start.length == 20.0
+    assert np.max(np.linalg.norm(solve(saved).centerline - np.array(shown["centerline"]), axis=1)) < 1e-6 * length
 
 
 def clipped_thesis_problem(problem):

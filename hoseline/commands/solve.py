@@ -1,4 +1,4 @@
-"""`hoseline solve problem.toml -o out/ [--export iges,step,...]`: place one hose, write its files."""
+"""`hoseline solve problem.toml -o out/ [--export iges,step,...] [--hysteresis 720]`: place one hose, write its files."""
 
 from __future__ import annotations
 
@@ -12,6 +12,9 @@ from rich.console import Console
 from hoseline.commands.common import (BAD_INPUT, OUT_HELP, QUIET_HELP, compile_solver, errors_to_exit_codes, fail,
                                       progress_bar, read_input)
 from hoseline.io.export_names import FILE_NAMES, parse_formats
+from hoseline.model import limits
+
+HYSTERESIS_STEP_DEG = 10.0  # largest twist step of --hysteresis, degrees
 
 EXPORT_HELP = (
     "comma-separated CAD and model files to write beside the results: "
@@ -27,19 +30,30 @@ def solve_command(
     export: str = typer.Option("none", "--export", "-e", help=EXPORT_HELP),
     accuracy: str = typer.Option(None, "--accuracy", help="largest station error wanted, mm (e.g. 0.01mm): the "
                                                           "segment count is raised until the estimate meets it"),
+    hysteresis: str = typer.Option(None, "--hysteresis", metavar="MAX_DEG",
+                                   help="also twist the placed hose from 0 to MAX_DEG degrees and back (steps of at "
+                                        "most 10 deg) and write hysteresis.csv: the band between the two ways per "
+                                        "station at each twist (elastic model)"),
 ) -> None:
-    """Place the hose of a problem file; write centerline.csv, result.json and the exports asked for."""
+    """Place the hose of a problem file; write centerline.csv, result.json, the exports asked for (and
+    hysteresis.csv with --hysteresis)."""
     from hoseline.io.atomic import staged_directory
     from hoseline.io.exports import write_exports
+    from hoseline.io.hysteresis_csv import HYSTERESIS_FILE, write_hysteresis
     from hoseline.io.problem_file import ProblemFileError, load_problem
     from hoseline.io.results import write_results
+    from hoseline.procedures.placement.hysteresis import hysteresis_band
     from hoseline.procedures.placement.refinement import solve_to_accuracy
     from hoseline.procedures.placement.sequence import solve
     from hoseline.report.table import summary_table
 
     formats = export_formats(export)
     wanted = None if accuracy is None else accuracy_mm(accuracy)
+    largest_twist = None if hysteresis is None else twist_deg(hysteresis)
     problem = read_input(load_problem, problem_file, "problem file", (ProblemFileError,))
+    if largest_twist is not None and problem.has_contact:
+        raise fail("--hysteresis does not take contact yet (the twist continuation does not keep the hose out of the "
+                   "obstacles); remove [contact] or the option", BAD_INPUT)
     with errors_to_exit_codes(out):
         compile_solver(quiet)
         with progress_bar(quiet) as progress:
@@ -47,15 +61,22 @@ def solve_command(
                 result = solve(problem, progress=progress)
             else:
                 result = solve_to_accuracy(problem, wanted, progress=progress)
+        band = None if largest_twist is None else hysteresis_band(problem, largest_twist, hysteresis_step(largest_twist))
         with staged_directory(out) as staging:
             write_results(result, staging)
             exported = write_exports(result, staging, formats)
+            if band is not None:
+                write_hysteresis(band, staging)
     if not quiet:
         Console().print(summary_table([result], [problem.name]))
         if problem.fittings is not None:
             print_lengths(problem)
         print_contacts(result)
+        if band is not None:
+            print_hysteresis(band, largest_twist)
         Console().print(f"wrote {out / 'centerline.csv'} and {out / 'result.json'}")
+        if band is not None:
+            Console().print(f"wrote {out / HYSTERESIS_FILE}", soft_wrap=True)
         print_exports(out, exported)
 
 
@@ -69,6 +90,39 @@ def accuracy_mm(text: str) -> float:
     if not (math.isfinite(value) and value > 0.0):
         raise fail(f"--accuracy {text!r}: give a positive length in mm, e.g. 0.01mm", BAD_INPUT)
     return value
+
+
+def twist_deg(text: str) -> float:
+    """The --hysteresis value in degrees ("720deg" or "720"), or exit 2 saying what to give."""
+    number = text.strip().lower().removesuffix("deg").strip()
+    try:
+        value = float(number)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value != 0.0 and abs(value) <= limits.ANGLE_DEG):
+        raise fail(f"--hysteresis {text!r}: give the largest twist in degrees, not zero and within "
+                   f"+-{limits.ANGLE_DEG:g}, e.g. 720", BAD_INPUT)
+    return value
+
+
+def hysteresis_step(largest_twist_deg: float) -> float:
+    """The twist step, degrees: the largest that divides the largest twist into steps of at most HYSTERESIS_STEP_DEG."""
+    return abs(largest_twist_deg) / math.ceil(abs(largest_twist_deg) / HYSTERESIS_STEP_DEG - 1e-9)
+
+
+def print_hysteresis(band, largest_twist_deg: float) -> None:
+    """The summary line of the hysteresis band (procedures/placement/hysteresis.HysteresisBand): the largest band
+    (mm) and the twist (degrees) where it is, or why the twist stopped early."""
+    console = Console()
+    if band.failure:
+        console.print(f"[yellow]hysteresis: the twist to {largest_twist_deg:g} deg and back stopped early: "
+                      f"{band.failure}[/yellow]", soft_wrap=True)
+    if band.width.size == 0:
+        console.print("hysteresis: no twist was reached both ways; hysteresis.csv holds the header only")
+        return
+    widest = int(np.argmax(band.width))
+    console.print(f"hysteresis (twisted to {largest_twist_deg:g} deg and back): largest band {band.width[widest]:.4g} mm "
+                  f"at {band.twists_deg[widest]:g} deg twist", soft_wrap=True)
 
 
 def export_formats(text: str) -> list[str]:

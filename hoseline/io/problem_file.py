@@ -104,7 +104,7 @@ entering (frictionless), and the hose kept out of itself::
     radius = 15.0                    # mm
 
 These are not the [[obstacles]] of a sweep file (meshes the sweep measures clearance to, without
-contact); a sweep file with [contact] is refused until sweeps take contact.
+contact); a sweep file may hold [contact] too (static obstacles, kept out of at every pose).
 """
 
 from __future__ import annotations

@@ -26,6 +26,9 @@ The hose, the mounts at design position and the environment are those of a probl
     [sweep]
     compare_free_roll = true    # optional: also sweep with the end fitting free to spin
 
+    [contact]                   # optional, as in a problem file: static planes, spheres, cylinders
+                                # and self-contact, kept out of at every pose (no body: they do not move)
+
     [[clips]]                   # as in a problem file, plus:
     body = "knuckle"            # optional: the clip moves with this body (default: fixed)
 
@@ -194,6 +197,7 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
         for index, body in enumerate(clip_bodies):
             if body is not None and not isinstance(body, str):
                 raise SweepFileError(f"{source}: clips[{index}].body = {body!r}: must be the name of a [[bodies]] table")
+    _refuse_moving_contact(problem_part.get("contact"), source)
     if "bodies" not in sweep_part:
         raise SweepFileError(
             f"{source}: missing [[bodies]]: a sweep needs at least one moving body, with poses = \"table.csv\" "
@@ -205,9 +209,6 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
         raise
     except ProblemFileError as exc:
         raise SweepFileError(str(exc)) from None
-    if problem.has_contact:
-        raise SweepFileError(f"{source}: [contact]: a sweep does not take contact yet (its [[obstacles]] are meshes it "
-                             "measures clearance to); remove [contact], or place the hose at one pose with hoseline solve")
     tables = _validated(SweepTables, sweep_part, source, error=SweepFileError)
     motions = tuple(_motion(body, base, source) for body in tables.bodies)
     obstacles = tuple(_obstacle(item, base, source) for item in tables.obstacles)
@@ -223,6 +224,18 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
         )
     except ValueError as exc:
         raise SweepFileError(f"{source}: {exc}") from None
+
+
+def _refuse_moving_contact(contact, source: str) -> None:
+    """Refuse a [[contact.obstacles]] table with body = ...: contact obstacles stay where they are."""
+    if not isinstance(contact, dict) or not isinstance(contact.get("obstacles"), list):
+        return
+    for index, table in enumerate(contact["obstacles"]):
+        if isinstance(table, dict) and "body" in table:
+            raise SweepFileError(
+                f"{source}: contact.obstacles[{index}].body = {table['body']!r}: contact with an obstacle that moves "
+                "with a body is not implemented; remove body (the obstacle stays at its place), or give the moving "
+                "part as an [[obstacles]] mesh with body = ... (clearance measured, no contact)")
 
 
 def _motion(body: BodySection, base: Path, source: str) -> BodyMotion:

@@ -30,7 +30,8 @@ ENVELOPE_FILE = "envelope.stl"
 
 def poses_csv(result: SweepResult) -> str:
     """One row per pose: stage, travel, the fitting tips and directions, clearance to each obstacle,
-    bend radius, moments, reactions (mm, N, N*mm; directions are unit vectors into the hose)."""
+    bend radius, moments, reactions, clip loads, and per [contact] obstacle its force, smallest gap and
+    length in contact (mm, N, N*mm; directions are unit vectors into the hose)."""
     columns = {"pose": np.arange(result.pose_count), "stage": [_stage(result, k) for k in range(result.pose_count)],
                "travel": without_round_off(result.sweep.travel)}
     for end in ("start", "end"):
@@ -54,6 +55,11 @@ def poses_csv(result: SweepResult) -> str:
         columns[f"{label}_moment_Nmm"] = without_round_off(np.linalg.norm(result.clip_moments[:, j], axis=1))
         if clip.slides:
             columns[f"{label}_arc_length_mm"] = without_round_off(result.clip_arc_lengths[:, j])
+    for contact in result.contacts:  # each [contact] obstacle's push on the hose, the smallest gap, the length touching
+        label = f"contact_{contact.name}"
+        columns[f"{label}_force_N"] = without_round_off(np.linalg.norm(contact.total_force, axis=1))
+        columns[f"{label}_gap_mm"] = without_round_off(contact.min_gap)
+        columns[f"{label}_length_mm"] = without_round_off(contact.length_in_contact)
     if result.separation is not None:
         columns["free_roll_separation_mm"] = without_round_off(result.separation)
     columns["newton_iterations"] = result.iterations
@@ -97,6 +103,11 @@ def sweep_document(result: SweepResult, envelope: Envelope | None = None) -> dic
         "travel": without_round_off(result.sweep.travel),
         "assembly": result.assembly.summary(),
     }
+    if result.contacts:
+        document["contact"] = [{"name": c.name, "kind": c.kind, "min_gap_mm": without_round_off(c.min_gap),
+                                "total_force_N": without_round_off(c.total_force),
+                                "length_in_contact_mm": without_round_off(c.length_in_contact)}
+                               for c in result.contacts]
     if envelope is not None:
         document["envelope"] = {
             "file": ENVELOPE_FILE,

@@ -16,6 +16,9 @@ a plane is infinitely thick), and a trial state is accepted only if every gap it
 closed stays above a tenth of its value: a primitive cannot cross a body without ending inside
 it or passing through it, so no accepted step crosses into penetration.  Then the step is
 halved until the residual falls (the tracking Newton of newton.py).
+
+Downhill mode (minimise_with_contact): the shifted Newton of newton._minimise_kernel with the same
+step filter, judged by the total energy with the barrier (see its docstring); used after folds.
 """
 
 from __future__ import annotations
@@ -24,9 +27,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg
 from threadpoolctl import ThreadpoolController
 
-from hoseline.mechanics.banded import band_to_dense
+from hoseline.mechanics.banded import NEUTRAL, band_to_dense, banded_matvec
 from hoseline.mechanics.clipped import unknown_layout
 from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
 from hoseline.mechanics.contact import (
@@ -174,18 +178,25 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
                          (base.band, state.frames, h, node_grad, node_hess, index))
 
 
-def _kkt_step(system: ContactSystem) -> tuple[np.ndarray, np.ndarray, int]:
+def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int]:
     """(step, multiplier step, unstable directions on the constraint tangent space) of the KKT system.
 
     The banded factor with the low-rank border (contact_solve.banded_step); the dense matrix and
     LAPACK's sytrf where that is not to be trusted (counted in contact_solve.kkt_solves).
+    shift: sigma of the Hessian H + sigma I (the downhill mode, minimise_with_contact), N*mm/rad^2.
     """
-    solved = banded_step(system.band, system.jac_t, system.columns, system.signs, system.grad, system.constraint)
+    band = system.band
+    if shift != 0.0:
+        band = band.copy()
+        band[:, 0] += shift
+    solved = banded_step(band, system.jac_t, system.columns, system.signs, system.grad, system.constraint)
     if solved is not None:
         kkt_solves["banded"] += 1
         return solved
     kkt_solves["dense"] += 1
-    return dense_step(system.dense(), system.jac_t, system.grad, system.constraint)
+    hess = system.dense()
+    hess[np.diag_indices_from(hess)] += shift
+    return dense_step(hess, system.jac_t, system.grad, system.constraint)
 
 
 @dataclass
@@ -251,6 +262,8 @@ def solve_with_contact(
 
     Returns the final state and a report as newton.solve_equilibrium does; the state is only
     meaningful when report.converged.  tolerance: relative residual of force and moment balance.
+    Unstable directions counted by the KKT pivots at the converged state are confirmed by the dense
+    reduced Hessian (_lowest_mode): an eigenvalue above -NEUTRAL times the largest is zero (neutral).
     One BLAS thread: the dense systems are small, and threads only contend for the cores (10x
     slower on a loaded two-core machine).
     """
@@ -273,6 +286,8 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
             return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
         step, force_step, unstable = _kkt_step(system)
         if system.residual <= tolerance:
+            if unstable > 0 and _lowest_mode(system)[0] >= -NEUTRAL:
+                unstable = 0  # the pivots counted an eigenvalue that is zero to rounding (see NEUTRAL_MODE)
             return state, NewtonReport(True, iteration, system.residual, unstable)
         if iteration == max_iterations or not np.all(np.isfinite(step)):
             break
@@ -291,6 +306,180 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
             alpha *= 0.5
         if accepted is None:
             return state, NewtonReport(False, iteration + 1, system.residual, unstable, "no acceptable step found")
+        state, system = accepted
+    return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
+
+
+def minimise_with_contact(
+    props: RodProperties,
+    clamps: Clamps,
+    state: RodState,
+    model: ContactModel,
+    *,
+    tolerance: float = 1e-10,
+    max_iterations: int = 200,
+) -> tuple[RodState, NewtonReport]:
+    """Walk downhill from `state` (which must not penetrate) to a stable equilibrium with contact.
+
+    The downhill mode of solve_with_contact, as newton._minimise_kernel is that of the contact-free
+    Newton: where the KKT inertia counts unstable directions on the constraint tangent space, the
+    Hessian is shifted, H + sigma I, sigma grown tenfold until the count is zero; a step is
+    accepted (after the step filter) only if the merit, the total energy with the barrier minus
+    the multipliers times the constraint plus a penalty on the constraint, falls by at least a
+    tenth of the quadratic model's prediction; sigma shrinks after good steps and grows after poor
+    ones, so the method ends as plain Newton at a stable minimum.  Returns the final state and a
+    report as solve_with_contact; tolerance: relative residual.
+    """
+    with _blas_threads().limit(limits=1):
+        return _minimise_with_contact(props, clamps, state, model, tolerance, max_iterations)
+
+
+def _multipliers(clamps: Clamps, state: RodState) -> np.ndarray:
+    """The end force and the clip forces (N) in the order of the constraint rows (zeros for a free tip)."""
+    if not clamps.end_clamped:
+        return np.zeros(3)
+    return np.concatenate([state.end_force, clip_forces(clamps, state).reshape(-1)])
+
+
+def _hessian_times(system: ContactSystem, step: np.ndarray) -> np.ndarray:
+    """H step with H = band + columns diag(signs) columns^T (the unshifted Hessian)."""
+    return banded_matvec(system.band, step).reshape(-1) + system.columns @ (system.signs * (system.columns.T @ step))
+
+
+NEUTRAL_MODE = "unstable by the pivot count only: the lowest eigenvalue is zero to rounding (neutral)"
+
+
+def _lowest_mode(system: ContactSystem) -> tuple[float, np.ndarray]:
+    """(lowest eigenvalue of the Hessian on the constraint tangent space relative to its largest magnitude,
+    its eigenvector in the unknowns scaled to a largest entry of 1); dense, O(n^3): met once per fold."""
+    basis = scipy.linalg.null_space(system.jac_t.T)
+    values, vectors = scipy.linalg.eigh(basis.T @ system.dense() @ basis)
+    direction = basis @ vectors[:, 0]
+    relative = float(values[0]) / max(float(np.max(np.abs(values))), 1e-300)
+    return relative, direction / max(float(np.max(np.abs(direction))), 1e-300)
+
+
+def _leave_saddle(props, clamps, state, system, model, turns=(0.05, 0.2, 0.8)):
+    """From an unstable equilibrium, a state of lower energy along the most unstable direction, or None.
+
+    The direction: the eigenvector of the lowest eigenvalue of the Hessian on the constraint
+    tangent space (dense: a saddle is met once per fold); its largest rotation is each of `turns`
+    (rad) in order, cut by the step filter, and the constraints restored (_onto_constraints: a push
+    that leaves them would hand the merit's penalty a violation to undo, and the descent walks back
+    to the saddle); of its two senses the one of lower energy.  The first push whose energy is
+    below the saddle's is returned: a nearly degenerate saddle is flat to second order, and only a
+    longer push finds the fall; if none is lower (the step filter cut them to rounding), the
+    shortest, from which the shifted Newton walks on (the iteration limit bounds a return).
+    """
+    direction = _lowest_mode(system)[1]
+    rounding = 1e-12 * max(abs(system.energy), 1.0)
+    first = None
+    for turn in turns:
+        best = None
+        for sense in (turn, -turn):
+            step = sense * direction
+            watch = step_filter(props, clamps, state, step, model)
+            alpha = watch.limit
+            trial = _onto_constraints(props, clamps, apply_step(props, clamps, state, alpha * step, np.zeros(3)))
+            while not watch.admits(props, clamps, trial, model):
+                alpha *= 0.5
+                trial = _onto_constraints(props, clamps, apply_step(props, clamps, state, alpha * step, np.zeros(3)))
+            trial_system = evaluate_contact(props, clamps, trial, model)
+            if np.isfinite(trial_system.energy) and (best is None or trial_system.energy < best[1].energy):
+                best = trial, trial_system
+        if best is not None and best[1].energy < system.energy - rounding:
+            return best
+        first = first or best
+    return first
+
+
+def _onto_constraints(props: RodProperties, clamps: Clamps, state: RodState, corrections: int = 6) -> RodState:
+    """`state` moved back onto the constraints (end and clip positions) by least-norm Gauss-Newton steps
+    -J^T (J J^T)^-1 c, the multipliers kept (a free tip has no constraint)."""
+    for _ in range(corrections if clamps.end_clamped else 0):
+        system = evaluate(props, clamps, state)
+        if float(np.max(np.abs(system.constraint))) <= 1e-13 * props.length:
+            break
+        jac_t = system.jac_t
+        correction = -jac_t @ np.linalg.solve(jac_t.T @ jac_t, system.constraint)
+        state = apply_step(props, clamps, state, correction, np.zeros(3))
+    return state
+
+
+def _minimise_with_contact(props, clamps, state, model, tolerance, max_iterations):
+    """minimise_with_contact without the thread limit (the loop of newton._minimise_kernel, with the step filter)."""
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    kinds, first, second, gaps = model.pairs(nodes, 0.0)
+    if kinds.size:
+        worst = int(np.argmin(gaps))
+        return state, NewtonReport(False, 0, math.inf, -1, penetration_message(model, kinds[worst], first[worst],
+                                                                                second[worst], gaps[worst]))
+    system = evaluate_contact(props, clamps, state, model)
+    diag_scale = float(np.max(np.abs(system.band[:, 0])))
+    sigma_floor = 1e-10 * diag_scale
+    sigma, penalty = 0.0, 0.0
+    for iteration in range(max_iterations + 1):
+        if not np.isfinite(system.residual):
+            return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
+        step, force_step, unstable = _kkt_step(system)
+        if system.residual <= tolerance and unstable != 0 and iteration < max_iterations:
+            if _lowest_mode(system)[0] >= -NEUTRAL:  # the KKT pivots counted a rounding-level eigenvalue
+                return state, NewtonReport(True, iteration, system.residual, 0, NEUTRAL_MODE)
+            pushed = _leave_saddle(props, clamps, state, system, model)  # no gradient to walk down: push
+            if pushed is None:
+                return state, NewtonReport(False, iteration, system.residual, unstable,
+                                           "an unstable equilibrium: every push along its most unstable mode gave a non-finite energy")
+            state, system = pushed
+            continue
+        if system.residual <= tolerance:
+            return state, NewtonReport(True, iteration, system.residual, unstable)
+        if iteration == max_iterations:
+            break
+        plain_newton = unstable == 0 and sigma == 0.0 and system.residual < 1e-6 and np.all(np.isfinite(step))
+        multipliers = _multipliers(clamps, state)
+        base_constraint = float(system.constraint @ system.constraint)
+        accepted = None
+        for _ in range(40):
+            if not plain_newton and (sigma > 0.0 or unstable != 0 or not np.all(np.isfinite(step))):
+                sigma = max(sigma, sigma_floor)
+                step, force_step, shifted_unstable = _kkt_step(system, sigma)
+                if shifted_unstable != 0 or not np.all(np.isfinite(step)):
+                    sigma *= 10.0
+                    continue
+            watch = step_filter(props, clamps, state, step, model)
+            alpha = watch.limit
+            trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
+            while not watch.admits(props, clamps, trial, model) and alpha > 1e-9:
+                alpha *= 0.5
+                trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
+            trial_system = evaluate_contact(props, clamps, trial, model)
+            if plain_newton:  # close to a stable minimum: plain Newton, judged by the residual
+                if trial_system.residual < system.residual:
+                    accepted = trial, trial_system
+                    break
+                plain_newton, sigma = False, sigma_floor
+                continue
+            scaled = alpha * step
+            quadratic = float(system.grad @ scaled + 0.5 * scaled @ _hessian_times(system, scaled))
+            if base_constraint > 0.0:
+                penalty = max(penalty, 2.0 * max(quadratic, 0.0) / base_constraint + 1e-8 * diag_scale)
+            predicted = quadratic - 0.5 * penalty * base_constraint
+            base = system.energy - multipliers @ system.constraint + 0.5 * penalty * base_constraint
+            actual = (trial_system.energy - multipliers @ trial_system.constraint
+                      + 0.5 * penalty * float(trial_system.constraint @ trial_system.constraint) - base)
+            rounding = 1e-13 * (abs(base) + diag_scale)
+            if predicted < -rounding:
+                ratio = actual / predicted
+            else:
+                ratio = 1.0 if actual <= rounding else -1.0
+            if np.isfinite(actual) and (ratio > 0.1 or trial_system.residual <= tolerance):
+                if ratio > 0.75 and alpha == 1.0:
+                    sigma = 0.0 if sigma <= 4.0 * sigma_floor else 0.25 * sigma
+                accepted = trial, trial_system
+                break
+            sigma = max(4.0 * sigma, 1e-4 * diag_scale)
+        if accepted is None:
+            return state, NewtonReport(False, iteration + 1, system.residual, unstable, "no descent step found")
         state, system = accepted
     return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
 

@@ -11,7 +11,10 @@ placement locked, moved with the fitting since) are what the page drags; the end
 clamped at that frame turned by the twist at assembly.  Clips are dragged the same way: each
 clip's point and frame as it holds the hose (a fixed clip keeps the roll locked at assembly,
 carried with its frame); the problem's clip keeps its arc length (on its station) and takes the
-dragged point and the frame's d3 as its direction.  A sweep's poses move the fittings and the
+dragged point and the frame's d3 as its direction.  With end fittings (model/fittings.py) the page
+drags the ports instead, each carrying its rigid fitting (studio/ports.py): the outlets, where the
+flexible hose is clamped, follow rigidly, and the problem keeps the ports with each elbow's
+reference turned with its port.  A sweep's poses move the fittings and the
 clips riding on bodies from their design position, where the sweep was opened, as a sweep run does.
 
 Not thread-safe: the server calls it from one worker thread only.
@@ -36,6 +39,7 @@ from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.tracking import Fittings, Step, Tracker, twisted
 from hoseline.studio.messages import HoseTarget, Target
+from hoseline.studio.ports import PortAnchor, piece_outline
 from hoseline.studio.view import placement_comparison, session_message, state_message
 
 
@@ -80,21 +84,18 @@ class Session:
     def open_problem(self, problem: Problem) -> None:
         """Edit `problem` from now on (the obstacles stay; a sweep's motion is dropped); place it.
 
-        Raises StudioError for what the studio cannot edit, PlacementError when it cannot be placed
-        (the session stays as it was).
+        Raises PlacementError when it cannot be placed (the session stays as it was).
         """
-        _editable(problem)
         self._adopt(problem, solve(problem))
         self.sweep, self.pose_index = None, None
         self.revision += 1
 
     def open_sweep(self, sweep: SweepProblem) -> None:
         """Edit the sweep's problem at design position, show its obstacles, play its motion; place it."""
-        _editable(sweep.problem)
         obstacles = [ShownObstacle(o, TriangleIndex(o.vertices, o.faces)) for o in sweep.obstacles]
         self._adopt(sweep.problem, solve(sweep.problem))
         self.sweep, self.pose_index, self.obstacles = sweep, None, obstacles
-        self.design = self.fittings_at_zero_twist()
+        self.design = self.handles()
         self.revision += 1
 
     def add_obstacle(self, name: str, vertices: np.ndarray, faces: np.ndarray, source: str) -> None:
@@ -141,6 +142,9 @@ class Session:
         self.problem, self.placement = problem, placement
         self.tracker = Tracker(problem, placement)
         self.end_base = twisted(placement.end_frame, -problem.end_twist_deg)
+        self.anchor = None if problem.fittings is None else PortAnchor.at(problem.fittings, placement.start_frame,
+                                                                          self.end_base)
+        self.port_frames = None if self.anchor is None else (self.anchor.start_port, self.anchor.end_port)
         self.comparison = placement_comparison(self.tracker.centerline, self.end_frame, placement)
         self.last_step = None
 
@@ -151,32 +155,39 @@ class Session:
         """
         twist = self.problem.end_twist_deg if target.twist is None else target.twist
         if target.pose is not None:
-            fittings = self._pose_fittings(target.pose)
+            handles = self._pose_fittings(target.pose)
         else:
-            fittings = self.fittings_at_zero_twist()
+            handles = self.handles()
             if target.start is not None:
-                fittings = replace(fittings, start_point=np.array(target.start.point),
-                                   start_frame=_frame(target.start.quaternion))
+                handles = replace(handles, start_point=np.array(target.start.point),
+                                  start_frame=_frame(target.start.quaternion))
             if target.end is not None:
-                fittings = replace(fittings, end_point=np.array(target.end.point), end_frame=_frame(target.end.quaternion))
+                handles = replace(handles, end_point=np.array(target.end.point), end_frame=_frame(target.end.quaternion))
             if target.clips is not None:
                 if len(target.clips) != len(self.problem.clips):
                     raise StudioError(f"clips: {len(target.clips)} given for the problem's {len(self.problem.clips)}: "
                                       "give every clip's point and quaternion, in the problem's order")
-                fittings = replace(fittings, clip_points=np.array([c.point for c in target.clips]).reshape(-1, 3),
-                                   clip_frames=np.array([_frame(c.quaternion) for c in target.clips]).reshape(-1, 3, 3))
-        data = problem_to_dict(self.problem)
-        data["start"] = {"point": fittings.start_point.tolist(), "direction": fittings.start_frame[2].tolist()}
-        data["end"] = {"point": fittings.end_point.tolist(), "direction": (-fittings.end_frame[2]).tolist(), "twist": twist}
+                handles = replace(handles, clip_points=np.array([c.point for c in target.clips]).reshape(-1, 3),
+                                  clip_frames=np.array([_frame(c.quaternion) for c in target.clips]).reshape(-1, 3, 3))
+        data = problem_to_dict(self.problem)  # with fittings, [start] and [end] are the ports
+        data["start"] = {"point": handles.start_point.tolist(), "direction": handles.start_frame[2].tolist()}
+        data["end"] = {"point": handles.end_point.tolist(), "direction": (-handles.end_frame[2]).tolist(), "twist": twist}
+        if self.anchor is not None:
+            data["fittings"] = self.anchor.fitting_tables(data["fittings"], handles.start_frame, handles.end_frame)
         if target.hose is not None:
             data["hose"] = _hose_section(data["hose"], self.problem, target.hose)
         if self.problem.clips:
-            data["clips"] = self._clip_sections(data["clips"], data["hose"]["length"], fittings)
-        problem = self._validated(data)
-        end_base = fittings.end_frame
+            data["clips"] = self._clip_sections(data["clips"], data["hose"]["length"], handles)
+        problem = self._validated(data)  # its start and end are the outlets (Fitting.outlet of the ports)
+        fittings = handles
+        if self.anchor is not None:
+            start_outlet, end_outlet = self.anchor.outlet_frames(handles.start_frame, handles.end_frame)
+            fittings = replace(handles, start_frame=start_outlet, end_frame=end_outlet)
         self.last_step = self._twist_to(problem, replace(fittings, start_point=problem.start.point,
                                                          end_point=problem.end.point))
-        self.problem, self.end_base = problem, end_base
+        self.problem, self.end_base = problem, fittings.end_frame
+        if self.anchor is not None:
+            self.port_frames = (handles.start_frame, handles.end_frame)
         if target.pose is not None:
             self.pose_index = target.pose
         self.comparison = None
@@ -219,9 +230,28 @@ class Session:
         return self.tracker.fittings.end_frame
 
     def fittings_at_zero_twist(self) -> Fittings:
-        """The fittings now, the end frame without the twist at assembly (what the page drags)."""
+        """Where the flexible hose is clamped now (the outlets with end fittings), the end frame without the twist."""
         fittings = self.tracker.fittings
         return replace(fittings, end_frame=self.end_base)
+
+    def handles(self) -> Fittings:
+        """What the page drags: the ports (mm; frames as in studio/ports.py) with end fittings, else the ends of the
+        hose; the end frame without the twist at assembly; the clips as they hold the hose."""
+        fittings = self.fittings_at_zero_twist()
+        if self.anchor is None:
+            return fittings
+        ports = self.problem.fittings
+        return replace(fittings, start_point=ports.start_port.point, start_frame=self.port_frames[0],
+                       end_point=ports.end_port.point, end_frame=self.port_frames[1])
+
+    def pieces(self) -> dict:
+        """The end fittings as the page draws them: per end that has one, its centreline in its port's frame (mm,
+        ports.piece_outline) and radius (mm)."""
+        if self.anchor is None:
+            return {}
+        frames = dict(zip(("start", "end"), self.port_frames))
+        return {name: piece_outline(port.point, frames[name], port.direction, fitting, self.problem.hose.outer_diameter)
+                for name, port, fitting in self.problem.fittings.pieces()}
 
     def obstacle_pose(self, shown: ShownObstacle) -> Pose:
         """Where an obstacle is: moved with its body to the sweep pose shown, else at design position."""
@@ -257,7 +287,8 @@ class Session:
     # --- helpers ---
 
     def _pose_fittings(self, index: int) -> Fittings:
-        """The fittings (end frame at zero twist) and clips at sweep pose `index`, moved with their bodies."""
+        """What the page drags (Session.handles: the ports with end fittings; end frame at zero twist) and the clips
+        at sweep pose `index`, moved with their bodies."""
         if self.sweep is None:
             raise StudioError("no sweep is open: the timeline needs a sweep file")
         if not 0 <= index < self.sweep.pose_count:
@@ -293,14 +324,6 @@ class Session:
             return problem_from_dict(data, source="studio")
         except ProblemFileError as exc:
             raise StudioError(str(exc).removeprefix("studio: ")) from None
-
-
-def _editable(problem: Problem) -> None:
-    """Refuse what the page cannot edit yet: the page drags the flexible hose's ends, so a problem
-    with rigid end fittings (ports and fittings, model/fittings.py) would be moved wrongly."""
-    if problem.fittings is not None:
-        raise StudioError("the studio does not take end fittings yet: remove [fittings.start] and [fittings.end] "
-                          "(give the mounts at the fittings' outlets and the free length), or use hoseline solve")
 
 
 def _frame(quaternion: list[float]) -> np.ndarray:

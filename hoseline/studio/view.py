@@ -1,6 +1,8 @@
 """What the page is sent: the shape, the fittings and clips, the colour-map data along the hose and the readouts.
 
-A clip is sent with the frame it holds the hose by (what the page drags back: a rotating or
+With end fittings, "fittings" are the ports (what the page drags) and "pieces" the fittings'
+centrelines in their ports' frames (drawn as rigid tubes carried by the ports); "centerline" is
+the flexible hose between the outlets.  A clip is sent with the frame it holds the hose by (what the page drags back: a rotating or
 sliding clip's roll found by the solve is not in it) and its load on the hose.
 
 Units as everywhere at the user boundary: mm, N, N*mm, degrees, kg/m.  Numbers that are not
@@ -34,7 +36,7 @@ def state_message(session: "Session") -> dict:
     with np.errstate(divide="ignore"):
         bend_radius = 1.0 / result.curvature - radius
     step = session.last_step
-    fittings = session.fittings_at_zero_twist()
+    fittings = session.handles()  # the ports with end fittings
     return {
         "type": "state",
         "centerline": result.centerline.tolist(),
@@ -47,6 +49,7 @@ def state_message(session: "Session") -> dict:
             "start": {"point": fittings.start_point.tolist(), "quaternion": _quaternion(fittings.start_frame)},
             "end": {"point": fittings.end_point.tolist(), "quaternion": _quaternion(fittings.end_frame)},
         },
+        "pieces": session.pieces(),
         "clips": [
             {"kind": clip.kind, "name": clip.name, "point": point.tolist(), "quaternion": _quaternion(frame),
              "arc_length": reaction.arc_length, "force": reaction.force.tolist(), "moment": reaction.moment.tolist()}
@@ -75,6 +78,8 @@ def state_message(session: "Session") -> dict:
             "single_plane_offset": result.single_plane_offset,
             "stability_margin": result.stability_margin,
             "max_twisting_moment": result.max_twisting_moment,
+            "free_length": problem.hose.length,
+            "overall_length": None if problem.fittings is None else problem.fittings.overall_length(problem.hose.length),
         },
         "step": None if step is None else {
             "iterations": step.iterations, "seconds": step.seconds, "events": step.events, "movement": step.movement,

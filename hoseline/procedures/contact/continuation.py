@@ -3,21 +3,27 @@
 As procedures/placement/continuation.py's follow, with the contact Newton
 (mechanics/contact_newton.py): each step starts from the previous equilibrium, which never
 penetrates, so the step filter keeps every later state out of the obstacles too.  A step that
-does not converge is halved.  Stability is checked at every step; a state that loses it is
-not followed through a fork here (the contact Newton has no downhill mode yet): the path
-fails with PlacementError naming where.
+does not converge is halved.  Stability is checked at every step.  Where the path loses it (a
+step ends on an unstable equilibrium) or ends in a fold (the steps keep failing: the hose
+snaps), the hose is relaxed downhill to a stable equilibrium at that fraction by the contact
+Newton's downhill mode (minimise_with_contact), the snap is recorded as an event of the log
+with where it happened and how far the hose moved, and the path is followed on from there;
+only if no stable equilibrium is found does the path fail with PlacementError naming where.
 """
 
 from __future__ import annotations
 
 from typing import Callable
 
-from hoseline.mechanics.contact_newton import ContactModel, solve_with_contact
-from hoseline.mechanics.newton import RodProperties
-from hoseline.mechanics.rod import Clamps, RodState
+import numpy as np
+
+from hoseline.mechanics.contact_newton import NEUTRAL_MODE, ContactModel, minimise_with_contact, solve_with_contact
+from hoseline.mechanics.newton import NewtonReport, RodProperties
+from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, StepControl
 
 CONTACT_TOLERANCE = 1e-9  # loosest final residual: the barrier's stiffness (pressure / gap) lifts the rounding floor
+DOWNHILL_ITERATIONS = 300  # of minimise_with_contact after a fold: a snap may travel far (a loop forming)
 
 
 def follow_contact(
@@ -35,8 +41,9 @@ def follow_contact(
     """Follow the stable equilibrium with contact from fraction `start` (where `state` is one) to 1.
 
     Returns (state at fraction 1, Newton iterations used).  log: if given, its iteration and step
-    counters grow.  progress: optional callable(phase, fraction) after each step.  Raises
-    PlacementError with the phase, the fraction and Newton's message when the path cannot be followed.
+    counters grow and every snap (loss of stability or fold) is recorded in log.events.
+    progress: optional callable(phase, fraction) after each step.  Raises PlacementError with the
+    phase, the fraction and Newton's message when the path cannot be followed.
     """
     t, dt, iterations = start, min(control.first, 1.0 - start), 0
     while t < 1.0 - 1e-14:
@@ -46,20 +53,52 @@ def follow_contact(
         iterations += report.iterations
         if log is not None:
             log.iterations += report.iterations
-        if not report.converged or report.unstable_directions != 0:
+        if report.converged and report.unstable_directions != 0:  # lost stability between t and t_next
+            start_from, what = trial, (f"stability lost between fractions {t:.4f} and {t_next:.4f} "
+                                       f"({report.unstable_directions} unstable direction(s))")
+        elif not report.converged and 0.5 * dt >= control.smallest:
             dt *= 0.5
-            if dt < control.smallest:
-                problem = report.message or f"{report.unstable_directions} unstable direction(s)"
-                raise PlacementError(
-                    f"placement phase '{phase}' with contact failed at fraction {t_next:.4f} (last converged "
-                    f"{t:.4f}): residual {report.residual:.2e} ({problem})"
-                )
             continue
+        elif not report.converged:  # the branch ends in a fold: the hose snaps
+            start_from, what = state, f"the equilibrium branch ended near fraction {t:.4f} (fold)"
+        else:
+            start_from = None
+        if start_from is not None:
+            trial, used = _snap(phase, path(t_next), props, state, start_from, model, tolerance, t, t_next, what,
+                                report, log)
+            iterations += used
+            dt = min(control.first, 1.0 - t_next)
         state, t = trial, t_next
         if log is not None:
             log.steps += 1
         if progress is not None:
             progress(phase, t)
-        if report.iterations <= control.fast_iterations:
+        if start_from is None and report.iterations <= control.fast_iterations:
             dt = min(control.largest, 2.0 * dt)
     return state, iterations
+
+
+def _snap(phase: str, clamps: Clamps, props: RodProperties, before: RodState, start_from: RodState,
+          model: ContactModel, tolerance: float, t: float, t_next: float, what: str, failure: NewtonReport,
+          log: ContinuationLog | None) -> tuple[RodState, int]:
+    """The stable equilibrium downhill of `start_from` under `clamps` (the snap at fraction t_next), and the
+    Newton iterations used; the event goes to the log.  Raises PlacementError when there is none."""
+    relaxed, report = minimise_with_contact(props, clamps, start_from, model, tolerance=tolerance,
+                                            max_iterations=DOWNHILL_ITERATIONS)
+    if log is not None:
+        log.iterations += report.iterations
+    if not report.converged or report.unstable_directions != 0:
+        problem = failure.message or f"{failure.unstable_directions} unstable direction(s)"
+        raise PlacementError(
+            f"placement phase '{phase}' with contact failed at fraction {t_next:.4f} (last converged {t:.4f}): "
+            f"residual {failure.residual:.2e} ({problem}), and no stable equilibrium was found downhill "
+            f"({report.message or f'{report.unstable_directions} unstable direction(s)'})")
+    if report.message == NEUTRAL_MODE:  # no snap: the step only looked unstable
+        return relaxed, report.iterations
+    h = props.segment_length
+    jump = float(np.max(np.linalg.norm(centerline(relaxed.frames, clamps.start_point, h)
+                                       - centerline(before.frames, clamps.start_point, h), axis=1)))
+    if log is not None:
+        log.events.append(f"{phase}: {what}; with contact, the hose snaps downhill to a stable equilibrium at "
+                          f"fraction {t_next:.4f}, largest station movement {jump:.3f} mm")
+    return relaxed, report.iterations

@@ -15,6 +15,7 @@ import math
 import numpy as np
 import scipy.linalg
 
+from hoseline.mechanics.banded import NEUTRAL
 from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_PLANE, node_terms
 from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact, penetration_message
 from hoseline.mechanics.newton import RodProperties
@@ -123,11 +124,14 @@ def contact_forces_beyond(props: RodProperties, clamps: Clamps, state: RodState,
 
 def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:
     """Smallest eigenvalue of the Hessian with the barrier, on the tangent space of the constraints, per length
-    (N/rad^2, as Result.stability_margin)."""
+    (N/rad^2, as Result.stability_margin); zero (neutral) when it is within NEUTRAL of the largest magnitude
+    (rounding: the barrier's curvature makes that largest eigenvalue big)."""
     system = evaluate_contact(props, clamps, state, model)
     basis = scipy.linalg.null_space(np.asarray(system.jac_t).T)
-    reduced = basis.T @ system.dense() @ basis
-    return float(scipy.linalg.eigvalsh(reduced, subset_by_index=[0, 0])[0]) / props.segment_length
+    values = scipy.linalg.eigvalsh(basis.T @ system.dense() @ basis)
+    if abs(values[0]) <= NEUTRAL * float(np.max(np.abs(values))):
+        return 0.0
+    return float(values[0]) / props.segment_length
 
 
 def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> Result:

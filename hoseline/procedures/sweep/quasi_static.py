@@ -13,7 +13,13 @@
    every obstacle (exact, clearance.py).  Clips move with their bodies like the fittings
    (point and frame), each clip's roll as found at assembly (fixed clips locked, rotating
    and sliding clips free); their reactions, and the arc length of sliding clips, per pose.
-5. Optionally the same sweep with the end fitting free to spin (the common modelling error
+5. With contact ([contact] in the problem: static analytic obstacles, self-contact) every pose is
+   solved with the contact Newton from the previous equilibrium (which clears everything; the
+   obstacles do not move), and followed by contact continuation (procedures/contact/) along the
+   interpolated poses when the direct solve fails; no branch switching there (a loss of stability
+   fails the sweep at that pose).  Per pose and obstacle: the smallest gap, the total force and the
+   length in contact; the start mount's reaction includes the contact loads.
+6. Optionally the same sweep with the end fitting free to spin (the common modelling error
    the seed paper warns about), and the separation of the two answers.
 """
 
@@ -29,15 +35,18 @@ from hoseline.mechanics.clipped_newton import clip_arc_lengths, clip_reactions, 
 from hoseline.mechanics.newton import node_positions, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
 from hoseline.mechanics.rotations import extrapolate_frames
+from hoseline.mechanics.contact_newton import solve_with_contact
 from hoseline.model.motion import Pose, interpolate
 from hoseline.model.mounts import Mount, single_plane_offset
 from hoseline.model.sweep import SweepProblem
+from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact
+from hoseline.procedures.contact.placement import contact_forces_beyond, contact_reports, problem_contact_model
 from hoseline.procedures.geometry.clearance import TriangleIndex, nearest_with_fittings
-from hoseline.procedures.placement.continuation import ContinuationLog, Progress, StepControl, follow
+from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, StepControl, follow
 from hoseline.procedures.placement.hose_health import hose_health
 from hoseline.procedures.placement.sequence import rod_properties, solve, weight_vector
 from hoseline.procedures.placement.result import Result
-from hoseline.procedures.sweep.result import ObstacleClearance, Snap, SweepResult
+from hoseline.procedures.sweep.result import ObstacleClearance, Snap, SweepContact, SweepResult
 
 JUMP_FACTOR = 3.0  # a step moving a station more than this times the mounts' movement is followed in sub-steps
 CAREFUL = StepControl(first=0.1, largest=0.1)  # sub-steps of a suspicious step
@@ -83,6 +92,7 @@ class _Tracker:
                               np.array([clip.force for clip in assembly.clips]).reshape(count, 3), np.zeros(count),
                               np.array([clip.arc_length for clip in assembly.clips]))
         self.before: RodState | None = None  # the equilibrium one pose back, for the secant predictor
+        self.contact = problem_contact_model(sweep.problem) if sweep.problem.has_contact else None
 
     def clamps(self, start: Pose, end: Pose, *clip_poses: Pose) -> Clamps:
         """The clamps with the start body at `start`, the end body at `end` and each clip's body at its pose."""
@@ -108,8 +118,11 @@ class _Tracker:
         clamps = self.clamps(*target)
         old_nodes = stations(self.props, clamps, self.state)
         limit = JUMP_FACTOR * self._mount_movement(target) + 1e-6 * self.props.length
-        guess = self.state if self.before is None else _secant(self.before, self.state)
-        trial, report = solve_equilibrium(self.props, clamps, guess)
+        if self.contact is None:
+            guess = self.state if self.before is None else _secant(self.before, self.state)
+            trial, report = solve_equilibrium(self.props, clamps, guess)
+        else:  # from the previous equilibrium, which clears everything (a secant guess might not)
+            trial, report = solve_with_contact(self.props, clamps, self.state, self.contact, tolerance=CONTACT_TOLERANCE)
         iterations = report.iterations
         events: list[str] = []
         jump = _largest_movement(old_nodes, stations(self.props, clamps, trial)) if report.converged else math.inf
@@ -121,13 +134,17 @@ class _Tracker:
 
             control = PLAIN if not report.converged else CAREFUL
             logged, counted = len(self.log.events), self.log.iterations
-            trial = follow(f"step to pose {index}", path, self.props, self.state, self.log, control=control)
+            if self.contact is None:
+                trial = follow(f"step to pose {index}", path, self.props, self.state, self.log, control=control)
+            else:  # a start mount that moved may carry the old shape into an obstacle: the sub-steps shrink until clear
+                trial = follow_contact(f"step to pose {index}", path, self.props, self.state, self.contact,
+                                       control=control, log=self.log)[0]
             events = self.log.events[logged:]
             iterations += self.log.iterations - counted
             jump = _largest_movement(old_nodes, stations(self.props, clamps, trial))
             self.before = None  # a new branch or a sharp turn: no secant across it
         else:
-            self.before = self.state
+            self.before = None if self.contact is not None else self.state
         self.state, self.poses = trial, target
         return _Reached(trial, clamps, iterations, events, jump)
 
@@ -189,6 +206,7 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None,
     health = []
     iterations = np.zeros(count, dtype=int)
     near = [[] for _ in sweep.obstacles]
+    touching = []  # per pose: the ObstacleContact of every contact obstacle (and "self")
     snaps: list[Snap] = []
     events: list[str] = []
     solve_time = clearance_time = 0.0
@@ -206,6 +224,10 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None,
             clip_arcs[k] = clip_arc_lengths(tracker.props, reached.clamps, reached.state)
         mounts[:, k] = _mount_geometry(reached.clamps)
         health.append(hose_health(tracker.props, reached.clamps, reached.state, problem.hose.outer_radius))
+        if tracker.contact is not None:
+            touching.append(_contacts_at(k, tracker, reached))
+            beyond = contact_forces_beyond(tracker.props, reached.clamps, reached.state, tracker.contact)
+            health[-1] = replace(health[-1], start_force=health[-1].start_force - beyond[0])
         iterations[k] = reached.iterations
         if reached.events:
             events.extend(reached.events)
@@ -265,7 +287,35 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None,
         clip_moments=clip_loads[1],
         clip_arc_lengths=clip_arcs,
         station_arc_lengths=stretched if any(clip.slides for clip in problem.clips) else None,
+        contacts=_per_obstacle(touching),
     )
+
+
+def _contacts_at(index: int, tracker: _Tracker, reached: _Reached) -> list:
+    """The contact reports (procedures/contact/placement.contact_reports) at pose `index`; PlacementError if the
+    hose enters anything there (the contact solver's guarantee failed)."""
+    reports = contact_reports(tracker.sweep.problem, tracker.props, reached.clamps, reached.state, tracker.contact)
+    worst = min(reports, key=lambda report: report.min_gap)
+    if worst.min_gap < 0.0:
+        raise PlacementError(f"sweep with contact: at pose {index} the hose enters {worst.name!r} by "
+                             f"{-worst.min_gap:.3g} mm; this is a solver error, please report it with the sweep file")
+    return reports
+
+
+def _per_obstacle(touching: list) -> list[SweepContact]:
+    """The per-pose contact reports (a list per pose) regrouped per obstacle, over the poses."""
+    if not touching:
+        return []
+    return [
+        SweepContact(
+            name=first.name,
+            kind=first.kind,
+            min_gap=np.array([pose[j].min_gap for pose in touching]),
+            total_force=np.array([pose[j].total_force for pose in touching]),
+            length_in_contact=np.array([pose[j].length_in_contact for pose in touching]),
+        )
+        for j, first in enumerate(touching[0])
+    ]
 
 
 def _free_roll_sweep(sweep: SweepProblem, assembly: Result, progress: Progress | None) -> tuple[np.ndarray, list[str]]:

@@ -42,6 +42,23 @@ class ObstacleClearance:
 
 
 @dataclass
+class SweepContact:
+    """The contact of the hose with one obstacle of the problem's [contact] (or itself, name "self") along the sweep.
+
+    name, kind: as in the problem ("plane", "sphere", "cylinder"; "self").  min_gap: (M,) mm, the smallest
+    gap between the hose surface and the obstacle (>= 0; inf if never near).  total_force: (M, 3) N, the
+    obstacle's push on the hose.  length_in_contact: (M,) mm, at the resolution of the stations (see
+    placement/result.ObstacleContact).
+    """
+
+    name: str
+    kind: str
+    min_gap: np.ndarray
+    total_force: np.ndarray
+    length_in_contact: np.ndarray
+
+
+@dataclass
 class Snap:
     """A snap-through along the sweep: the hose jumped between two poses.
 
@@ -80,6 +97,7 @@ class SweepResult:
         the hose (it changes for a sliding clip).  station_arc_lengths: (M, N+1) mm, the arc length
         of the stations at each pose where a sliding clip stretches the spans next to it, else None
         (the stations are then at s).
+    contacts: one per obstacle of the problem's [contact] (and "self" with self-contact); empty without contact.
     """
 
     sweep: SweepProblem
@@ -110,6 +128,7 @@ class SweepResult:
     clip_moments: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))
     clip_arc_lengths: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     station_arc_lengths: np.ndarray | None = None
+    contacts: list[SweepContact] = field(default_factory=list)
 
     @property
     def pose_count(self) -> int:
@@ -194,6 +213,14 @@ class SweepResult:
             magnitude = np.linalg.norm(values, axis=1)
             k = int(np.argmax(magnitude))
             rows.append(self._row(name, magnitude[k], unit, k))
+        for contact in self.contacts:  # the hardest push and the closest approach of each [contact] obstacle
+            what = "itself" if contact.name == "self" else contact.name
+            force = np.linalg.norm(contact.total_force, axis=1)
+            k = int(np.argmax(force))
+            rows.append(self._row(f"contact force from {what}", force[k], "N", k))
+            if np.any(np.isfinite(contact.min_gap)):
+                k = int(np.argmin(contact.min_gap))
+                rows.append(self._row(f"smallest contact gap to {what}", contact.min_gap[k], "mm", k))
         if self.separation is not None:
             k = int(np.argmax(self.separation))
             rows.append(self._row("separation from the free-roll answer", self.separation[k], "mm", k))

@@ -1,6 +1,8 @@
 // The two fittings and the clips: each an object whose axes are its frame (x = d1, y = d2, z = d3 along
 // the hose; the end fitting without its twist), a fitting drawn as a short body behind the tip, a clip
 // as a ring round the hose at its point (a ball clip, which holds the position only, as a sphere).
+// With end fittings the objects 'start' and 'end' are the ports, and each fitting is drawn as a rigid
+// tube along its centreline from the port to the outlet (in the port's frame, so it turns with the port).
 // Objects are kept by name ('start', 'end', 'clip0', 'clip1', ...).  A TransformControls gizmo moves or
 // turns the selected one; every change of it is a drag event.
 import * as THREE from 'three';
@@ -37,9 +39,10 @@ export class FittingsView {
     this.selected = null;
   }
 
-  /** Size the fitting bodies to the hose (outer diameter, mm) and make one object per clip of a state
-   * message's `clips` (kind 'ball' a sphere, the others a ring); called when a session starts. */
-  build(outerDiameter, clips = []) {
+  /** Size the fitting bodies to the hose (outer diameter, mm), draw the end fittings of a state message's
+   * `pieces` and make one object per clip of its `clips` (kind 'ball' a sphere, the others a ring); called when a
+   * session starts. */
+  build(outerDiameter, clips = [], pieces = {}) {
     for (const name of Object.keys(this.objects).filter((key) => key.startsWith('clip'))) {
       this.group.remove(this.objects[name]);
       delete this.objects[name];
@@ -60,13 +63,31 @@ export class FittingsView {
       this.objects[`clip${k}`] = object;
       this.group.add(object);
     });
+    this.outerDiameter = outerDiameter;
+    this.shapeEnds(pieces, true);
+  }
+
+  /** Draw each end as its fitting of `pieces` ({start, end}: centreline in the port's frame, mm, and radius), or
+   * as a short body behind the tip where there is none; only when they changed (a fresh placement may give the
+   * ports another roll) or `always`. */
+  shapeEnds(pieces = {}, always = false) {
+    const key = JSON.stringify(pieces, (_, v) => (typeof v === 'number' ? Math.round(v * 1e6) : v));  // to 1e-6 mm
+    if (!always && key === this.piecesKey) return;
+    this.piecesKey = key;
+    const outerDiameter = this.outerDiameter;
     for (const name of ['start', 'end']) {
       const object = this.objects[name];
+      object.traverse((child) => { if (child.geometry) { child.geometry.dispose(); child.material.dispose(); } });
       object.clear();
+      const material = new THREE.MeshStandardMaterial({ color: COLOURS[name], roughness: 0.4, metalness: 0.3 });
+      if (pieces[name]) {
+        object.add(...FittingsView.piece(pieces[name], material, `${name} fitting piece`),
+          new THREE.AxesHelper(4 * outerDiameter));
+        continue;
+      }
       const sign = name === 'start' ? -1 : 1;  // the fitting lies behind the tip: before the start, after the end
       const length = 3 * outerDiameter;
-      const body = new THREE.Mesh(new THREE.CylinderGeometry(0.75 * outerDiameter, 0.75 * outerDiameter, length, 24),
-        new THREE.MeshStandardMaterial({ color: COLOURS[name], roughness: 0.4, metalness: 0.3 }));
+      const body = new THREE.Mesh(new THREE.CylinderGeometry(0.75 * outerDiameter, 0.75 * outerDiameter, length, 24), material);
       body.rotation.x = Math.PI / 2;  // cylinder axis (y) onto z
       body.position.z = (sign * length) / 2;
       body.name = `${name} fitting body`;
@@ -129,6 +150,24 @@ export class FittingsView {
       object.quaternion.premultiply(new THREE.Quaternion().setFromUnitVectors(current, wanted));
     }
     this.onDrag(name, object);
+  }
+
+  /** The meshes of a rigid end fitting: a tube of its radius along its centreline (points in the port's frame,
+   * mm), a ball at a sharp corner (a centreline of three points: port, vertex, outlet). */
+  static piece({ centreline, radius }, material, name) {
+    const points = centreline.map((p) => new THREE.Vector3(...p));
+    const path = new THREE.CurvePath();
+    for (let k = 1; k < points.length; k++) path.add(new THREE.LineCurve3(points[k - 1], points[k]));
+    const tube = new THREE.Mesh(new THREE.TubeGeometry(path, 16 * (points.length - 1), radius, 24, false), material);
+    tube.name = name;
+    const meshes = [tube];
+    if (points.length === 3) {
+      const ball = new THREE.Mesh(new THREE.SphereGeometry(radius, 24, 16), material);
+      ball.position.copy(points[1]);
+      ball.name = `${name} corner`;
+      meshes.push(ball);
+    }
+    return meshes;
   }
 
   /** A fitting's target for the server: tip (mm) and quaternion [w, x, y, z]. */

@@ -56,11 +56,12 @@ function receive(message) {
 function draw(message) {
   state = message;
   if (starting) {
-    fittings.build(message.hose.outer_diameter, message.clips);
+    fittings.build(message.hose.outer_diameter, message.clips, message.pieces);
     panel.start(session, message);
     markActive();
   }
   paint();
+  fittings.shapeEnds(message.pieces);
   obstacles.place(message.obstacle_poses);
   if (message.seq === null ? !connection.waiting : message.seq >= connection.seq) fittings.place(message.fittings, message.clips);
   if (starting) { fitView(); starting = false; }

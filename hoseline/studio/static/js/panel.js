@@ -177,6 +177,8 @@ export class Panel {
     const limit = state.hose.min_bend_radius;
     rows.push(['min bend radius', `${fmt(r.min_bend_radius)} mm${limit ? ` (minimum ${fmt(limit)})` : ''}`,
       limit ? r.min_bend_radius === null || r.min_bend_radius >= limit : null]);
+    rows.push(['hose length', r.overall_length === null ? `${fmt(r.free_length)} mm`
+      : [`free ${fmt(r.free_length)} mm`, `overall ${fmt(r.overall_length)} mm (fittings included)`], null]);
     rows.push(['start reaction', [vector(r.start_force, 'N'), vector(r.start_moment, 'N·mm')], null]);
     rows.push(['end reaction', [vector(r.end_force, 'N'), vector(r.end_moment, 'N·mm')], null]);
     state.clips.forEach((clip, k) => rows.push([`clip ${clip.name || k + 1} (${clip.kind})`,
