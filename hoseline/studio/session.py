@@ -38,6 +38,7 @@ from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.tracking import Fittings, Step, Tracker, twisted
+from hoseline.studio.contact_shapes import SOURCE as CONTACT_SOURCE, contact_meshes
 from hoseline.studio.messages import HoseTarget, Target
 from hoseline.studio.ports import PortAnchor, piece_outline
 from hoseline.studio.view import placement_comparison, session_message, state_message
@@ -82,17 +83,21 @@ class Session:
     # --- opening things ---
 
     def open_problem(self, problem: Problem) -> None:
-        """Edit `problem` from now on (the obstacles stay; a sweep's motion is dropped); place it.
+        """Edit `problem` from now on (the obstacles stay, those of the last problem's [contact] replaced by
+        this one's; a sweep's motion is dropped); place it.
 
         Raises PlacementError when it cannot be placed (the session stays as it was).
         """
         self._adopt(problem, solve(problem))
         self.sweep, self.pose_index = None, None
+        kept = [shown for shown in self.obstacles if shown.obstacle.source != CONTACT_SOURCE]
+        self.obstacles = kept + _shown(contact_meshes(problem))
         self.revision += 1
 
     def open_sweep(self, sweep: SweepProblem) -> None:
-        """Edit the sweep's problem at design position, show its obstacles, play its motion; place it."""
-        obstacles = [ShownObstacle(o, TriangleIndex(o.vertices, o.faces)) for o in sweep.obstacles]
+        """Edit the sweep's problem at design position, show its obstacles (and those of its [contact]), play its
+        motion; place it."""
+        obstacles = _shown(list(sweep.obstacles) + contact_meshes(sweep.problem))
         self._adopt(sweep.problem, solve(sweep.problem))
         self.sweep, self.pose_index, self.obstacles = sweep, None, obstacles
         self.design = self.handles()
@@ -324,6 +329,11 @@ class Session:
             return problem_from_dict(data, source="studio")
         except ProblemFileError as exc:
             raise StudioError(str(exc).removeprefix("studio: ")) from None
+
+
+def _shown(obstacles: list[Obstacle]) -> list[ShownObstacle]:
+    """The obstacles with their search trees."""
+    return [ShownObstacle(o, TriangleIndex(o.vertices, o.faces)) for o in obstacles]
 
 
 def _frame(quaternion: list[float]) -> np.ndarray:

@@ -80,6 +80,11 @@ def state_message(session: "Session") -> dict:
             "max_twisting_moment": result.max_twisting_moment,
             "free_length": problem.hose.length,
             "overall_length": None if problem.fittings is None else problem.fittings.overall_length(problem.hose.length),
+            "contacts": [
+                {"name": c.name, "kind": c.kind, "min_gap": _finite_or_none(c.min_gap),
+                 "total_force": c.total_force.tolist(), "length_in_contact": c.length_in_contact}
+                for c in result.contacts
+            ],
         },
         "step": None if step is None else {
             "iterations": step.iterations, "seconds": step.seconds, "events": step.events, "movement": step.movement,

@@ -21,6 +21,13 @@ holds them): each on its station, a fixed clip with the roll locked at assembly 
 frame, rotating and sliding clips free to roll, a sliding clip's arc length an unknown of every
 step.  Moving a clip is a change of the fittings like any other: its point and frame are
 interpolated with the fittings' on a followed step.
+
+With contact (Problem.contact, Problem.self_contact) every step runs the contact Newton
+(mechanics/contact_newton.py) from the current equilibrium, which clears every obstacle, and is
+followed by contact continuation (procedures/contact/continuation.follow_contact, which relaxes
+downhill at a fold and logs the snap) when the direct solve fails, ends unstable or jumps; a
+change of properties that leaves the hose unstable relaxes it downhill with the barrier
+(minimise_with_contact).  The obstacles do not move.
 """
 
 from __future__ import annotations
@@ -32,10 +39,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from hoseline.mechanics.clipped_newton import station_positions
+from hoseline.mechanics.contact_newton import ContactModel, minimise_with_contact, solve_with_contact
 from hoseline.mechanics.newton import RodProperties, node_positions, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
 from hoseline.mechanics.rotations import rotation_matrix, rotation_vector
 from hoseline.model.problem import Problem
+from hoseline.procedures.contact import placement as contact_placement
+from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact
 from hoseline.procedures.placement.continuation import (
     ContinuationLog,
     PlacementError,
@@ -101,6 +111,7 @@ class Tracker:
                               np.array([clip.arc_length for clip in result.clips]))
         self.residual = result.residual
         self.log = ContinuationLog()
+        self.contact = _contact_model(problem)
 
     @property
     def fittings(self) -> Fittings:
@@ -131,14 +142,15 @@ class Tracker:
         before = self.centerline
         logged, counted = len(self.log.events), self.log.iterations
         state = self.state
+        contact = _contact_model(problem)  # its barrier stiffness follows the hose's weight and stiffness
         try:
             if not _same_properties(props, self.props):
-                state = self._change_properties(self.props, props, self.clamps, state)
-            state = self._move_fittings(props, self.clamps, clamps, state)
+                state = self._change_properties(self.props, props, self.clamps, state, contact)
+            state = self._move_fittings(props, self.clamps, clamps, state, contact)
         except PlacementError:
             del self.log.events[logged:]
             raise
-        self.problem, self.props, self.clamps, self.state = problem, props, clamps, state
+        self.problem, self.props, self.clamps, self.state, self.contact = problem, props, clamps, state, contact
         movement = float(np.max(np.linalg.norm(self.centerline - before, axis=1)))
         return Step(self.log.iterations - counted, time.perf_counter() - started, self.log.events[logged:], movement)
 
@@ -147,12 +159,20 @@ class Tracker:
 
         lock_angle_deg: the lock angle of the placement it started from, degrees.
         """
-        return build_result(self.problem, self.props, self.clamps, self.state, lock_angle_deg, self.log,
-                            time.perf_counter(), self.residual)
+        result = build_result(self.problem, self.props, self.clamps, self.state, lock_angle_deg, self.log,
+                              time.perf_counter(), self.residual)
+        if self.contact is not None:
+            result = contact_placement.with_contact(result, self.props, self.clamps, self.state, self.contact)
+        return result
 
-    def _move_fittings(self, props: RodProperties, old: Clamps, new: Clamps, state: RodState) -> RodState:
-        """The equilibrium under `new` clamps, from `state` in equilibrium under `old`."""
-        trial, report = solve_equilibrium(props, new, state)
+    def _move_fittings(self, props: RodProperties, old: Clamps, new: Clamps, state: RodState,
+                       contact: ContactModel | None) -> RodState:
+        """The equilibrium under `new` clamps, from `state` in equilibrium under `old` (kept out of the
+        obstacles of `contact`, if given)."""
+        if contact is None:
+            trial, report = solve_equilibrium(props, new, state)
+        else:
+            trial, report = solve_with_contact(props, new, state, contact, tolerance=CONTACT_TOLERANCE)
         self.log.iterations += report.iterations
         if report.converged:
             moved = np.max(np.linalg.norm(_stations(props, new, trial) - _stations(props, old, state), axis=1))
@@ -163,19 +183,32 @@ class Tracker:
         def path(t: float) -> Clamps:
             return _interpolate(old, new, t)
 
-        reached = follow("move", path, props, state, self.log, control=CAREFUL if report.converged else PLAIN)
-        reached, final = solve_equilibrium(props, new, reached)
+        control = CAREFUL if report.converged else PLAIN
+        if contact is not None:
+            reached = follow_contact("move", path, props, state, contact, control=control, log=self.log)[0]
+            reached, final = solve_with_contact(props, new, reached, contact, tolerance=CONTACT_TOLERANCE)
+        else:
+            reached = follow("move", path, props, state, self.log, control=control)
+            reached, final = solve_equilibrium(props, new, reached)
         self.log.iterations += final.iterations
+        if not final.converged:
+            raise PlacementError(f"the step was followed to its end, but Newton did not converge there (residual "
+                                 f"{final.residual:.2e}: {final.message}); move in smaller steps")
         self.residual = final.residual
         return reached
 
-    def _change_properties(self, old: RodProperties, new: RodProperties, clamps: Clamps, state: RodState) -> RodState:
-        """The equilibrium with properties `new`, from `state` in equilibrium with `old` (same clamps)."""
+    def _change_properties(self, old: RodProperties, new: RodProperties, clamps: Clamps, state: RodState,
+                           contact: ContactModel | None) -> RodState:
+        """The equilibrium with properties `new`, from `state` in equilibrium with `old` (same clamps; kept out
+        of the obstacles of `contact`, the new hose's model, if given)."""
         done, step = 0.0, 1.0
         while done < 1.0:
             target = min(1.0, done + step)
             props = _blend(old, new, target)
-            trial, report = solve_equilibrium(props, clamps, state)
+            if contact is None:
+                trial, report = solve_equilibrium(props, clamps, state)
+            else:
+                trial, report = solve_with_contact(props, clamps, state, contact, tolerance=CONTACT_TOLERANCE)
             self.log.iterations += report.iterations
             if not report.converged:
                 step *= 0.5
@@ -186,16 +219,33 @@ class Tracker:
                     )
                 continue
             if report.unstable_directions != 0:
-                candidates = push_along_modes(props, clamps, trial, report.unstable_directions)
-                relaxed = relax_to_stable(props, clamps, candidates, self.log)
-                if relaxed is None:
-                    raise PlacementError("the hose lost stability with the new properties and no stable shape was found")
-                trial = relaxed[0]
+                trial = self._relax(props, clamps, trial, report.unstable_directions, contact)
                 self.log.events.append(f"properties: stability lost at {target:.3f} of the change; moved to the "
                                        "stable branch along the critical mode")
             self.residual = report.residual
             done, state = target, trial
         return state
+
+    def _relax(self, props: RodProperties, clamps: Clamps, unstable: RodState, directions: int,
+               contact: ContactModel | None) -> RodState:
+        """A stable equilibrium downhill of the unstable equilibrium `unstable` (with `directions` unstable
+        directions); PlacementError when none is found."""
+        if contact is None:
+            relaxed = relax_to_stable(props, clamps, push_along_modes(props, clamps, unstable, directions), self.log)
+            found = None if relaxed is None else relaxed[0]
+        else:
+            found, report = minimise_with_contact(props, clamps, unstable, contact, tolerance=CONTACT_TOLERANCE)
+            self.log.iterations += report.iterations
+            if not report.converged or report.unstable_directions != 0:
+                found = None
+        if found is None:
+            raise PlacementError("the hose lost stability with the new properties and no stable shape was found")
+        return found
+
+
+def _contact_model(problem: Problem) -> ContactModel | None:
+    """The contact model of `problem`'s obstacles and self-contact, or None without contact."""
+    return contact_placement.problem_contact_model(problem) if problem.has_contact else None
 
 
 def twisted(frame: np.ndarray, twist_deg: float) -> np.ndarray:

@@ -181,6 +181,12 @@ export class Panel {
       : [`free ${fmt(r.free_length)} mm`, `overall ${fmt(r.overall_length)} mm (fittings included)`], null]);
     rows.push(['start reaction', [vector(r.start_force, 'N'), vector(r.start_moment, 'N·mm')], null]);
     rows.push(['end reaction', [vector(r.end_force, 'N'), vector(r.end_moment, 'N·mm')], null]);
+    for (const c of r.contacts) {
+      const touching = c.length_in_contact > 0;
+      rows.push([`contact with ${c.name}`, touching
+        ? [vector(c.total_force, 'N'), `over ${fmt(c.length_in_contact)} mm, least gap ${fmt(c.min_gap, 4)} mm`]
+        : `not touching (least gap ${c.min_gap === null ? 'far' : `${fmt(c.min_gap)} mm`})`, null]);
+    }
     state.clips.forEach((clip, k) => rows.push([`clip ${clip.name || k + 1} (${clip.kind})`,
       [vector(clip.force, 'N'), ...(clip.kind === 'ball' ? [] : [vector(clip.moment, 'N·mm')]), `at s = ${fmt(clip.arc_length)} mm`], null]));
     rows.push(['max twisting moment', `${fmt(r.max_twisting_moment)} N·mm`, null]);

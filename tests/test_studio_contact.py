@@ -1,0 +1,126 @@
+"""The studio with contact: a drag keeps the hose out of the problem's [contact] obstacles, which the page shows.
+
+A heavy hose hangs between two horizontal mounts and rests on a floor ([contact] plane at z = 0);
+the end mount is dragged down and sideways in small steps, as the page sends them.
+"""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hoseline.io.problem_file import load_problem, problem_from_dict, problem_to_dict
+from hoseline.io.sweep_file import sweep_from_dict
+from hoseline.procedures.sweep.quasi_static import run_sweep
+from hoseline.model.motion import matrix_quaternion
+from hoseline.procedures.placement.sequence import solve
+from hoseline.studio.messages import Target
+from hoseline.studio.session import Session
+from hoseline.studio.view import state_message
+
+LENGTH, MASS, RADIUS, HEIGHT = 400.0, 0.5, 5.0, 150.0
+
+
+def resting_hose(contact: bool = True):
+    """The hose of tests/test_sweep_contact.py with its end mount 100 mm lower: its middle lies on the floor."""
+    data = {"hose": {"length": LENGTH, "outer_diameter": 2 * RADIUS, "bending_stiffness": 500.0,
+                     "torsional_stiffness": 500.0, "mass_per_length": MASS, "segments": 30},
+            "start": {"point": [-150.0, 0.0, HEIGHT], "direction": [1.0, 0.0, 0.0]},
+            "end": {"point": [150.0, 0.0, HEIGHT - 100.0], "direction": [-1.0, 0.0, 0.0]},
+            "environment": {"gravity": [0.0, 0.0, -9.81]}}
+    if contact:
+        data["contact"] = {"obstacles": [{"kind": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0],
+                                          "name": "floor"}]}
+    return problem_from_dict(data)
+
+
+def dragged(session: Session, offset) -> None:
+    """Move the end fitting by `offset` (mm) in steps of at most 2 mm, as a drag sends them."""
+    state = state_message(session)["fittings"]["end"]
+    start = np.array(state["point"])
+    steps = int(np.ceil(np.linalg.norm(offset) / 2.0))
+    for k in range(1, steps + 1):
+        point = start + np.asarray(offset) * k / steps
+        session.apply(Target(type="set", seq=k, end={"point": point.tolist(), "quaternion": state["quaternion"]}))
+
+
+@pytest.fixture(scope="module")
+def dragged_on_the_floor():
+    session = Session(resting_hose())
+    before = session.result()
+    dragged(session, [-20.0, 15.0, -20.0])
+    return session, before
+
+
+def test_the_page_shows_the_floor_and_measures_clearance_to_it(dragged_on_the_floor):
+    session, _ = dragged_on_the_floor
+    [floor] = session.obstacles
+    assert floor.obstacle.name == "floor" and floor.obstacle.clearance == 0.0
+    message = state_message(session)
+    [near] = message["readouts"]["min_clearance"]
+    assert 0.0 <= near["distance"] < 0.01  # touching: within the barrier's activation distance
+    [contact] = message["readouts"]["contacts"]
+    assert contact["name"] == "floor" and contact["length_in_contact"] > 0.0
+
+
+def test_a_drag_keeps_the_hose_on_the_floor_not_through_it(dragged_on_the_floor):
+    session, before = dragged_on_the_floor
+    result = session.result()
+    [floor] = result.contacts
+    assert floor.min_gap >= 0.0
+    assert np.min(result.centerline[:, 2]) >= RADIUS  # the surface stays above the floor
+    assert floor.length_in_contact > before.contacts[0].length_in_contact  # the end went down: more hose lies on it
+    weight = MASS * 9.81e-3 * LENGTH  # kg/m * m/s^2 -> N/mm, times mm
+    np.testing.assert_allclose(result.start_force + result.end_force + floor.total_force, [0.0, 0.0, weight],
+                               atol=1e-6 * weight)  # the mounts and the floor carry the weight
+    assert result.stability_margin >= 0.0
+
+
+def test_without_the_floor_the_same_drag_goes_through_it():
+    """The check above can fail: the same hose and drag without [contact] ends below the floor."""
+    session = Session(resting_hose(contact=False))
+    dragged(session, [-20.0, 15.0, -20.0])
+    assert np.min(session.result().centerline[:, 2]) < -10.0
+
+
+def test_the_drag_ends_where_a_sweep_through_the_same_motion_ends(dragged_on_the_floor):
+    """A second code path: the quasi-static sweep (procedures/sweep) moving the end body along the drag, in 7 poses
+    instead of the drag's 19 steps; both keep the end fitting's roll locked at assembly."""
+    session, _ = dragged_on_the_floor
+    offset = np.array([-20.0, 15.0, -20.0])
+    data = problem_to_dict(resting_hose())
+    data["end"]["body"] = "arm"
+    data["bodies"] = [{"name": "arm", "stages": [{"name": "drag", "translate": [0.0, float(np.linalg.norm(offset))],
+                                                  "axis": (offset / np.linalg.norm(offset)).tolist(), "steps": 7}]}]
+    data["sweep"] = {"compare_free_roll": False}
+    swept = run_sweep(sweep_from_dict(data))
+    shown = session.result()
+    assert np.max(np.linalg.norm(swept.centerlines[-1] - shown.centerline, axis=1)) < 1e-6 * LENGTH
+    np.testing.assert_allclose(swept.contacts[0].total_force[-1], shown.contacts[0].total_force, rtol=1e-6)
+
+
+def test_after_place_again_the_saved_file_gives_the_shape_shown(tmp_path):
+    session = Session(resting_hose())
+    dragged(session, [10.0, -10.0, -10.0])
+    session.place_again()  # a fresh assembly locks the end fitting's roll afresh (a drag keeps the old lock)
+    path = tmp_path / "problem.toml"
+    path.write_text(session.problem_toml())
+    fresh = solve(load_problem(path), estimate_error=False)
+    shown = session.result()
+    assert np.max(np.linalg.norm(fresh.centerline - shown.centerline, axis=1)) < 1e-6 * LENGTH
+    np.testing.assert_allclose(fresh.contacts[0].total_force, shown.contacts[0].total_force, rtol=1e-6, atol=1e-9)
+
+
+def test_a_heavier_hose_from_the_slider_presses_harder_and_stays_out():
+    session = Session(resting_hose())
+    light = session.result().contacts[0]
+    session.apply(Target(type="set", seq=1, hose={"mass_per_length": 2.0 * MASS}))
+    heavy = session.result().contacts[0]
+    assert heavy.min_gap >= 0.0 and np.min(session.result().centerline[:, 2]) >= RADIUS
+    assert heavy.total_force[2] > 1.5 * light.total_force[2]
+
+
+def test_opening_another_problem_replaces_the_contact_obstacles_shown():
+    session = Session(resting_hose())
+    session.open_problem(replace(resting_hose(contact=False), name="free"))
+    assert session.obstacles == []
