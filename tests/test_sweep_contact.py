@@ -85,3 +85,23 @@ def test_a_contact_obstacle_on_a_moving_body_is_refused():
     contact = {"obstacles": [dict(FLOOR["obstacles"][0], body="arm")]}
     with pytest.raises(SweepFileError, match=r"contact.obstacles\[0\].body = 'arm': .* not implemented"):
         sweep_from_dict(lowered_end(contact))
+
+
+def test_the_report_draws_the_floor_and_colours_the_contact_points_by_their_push(on_and_through_the_floor):
+    from hoseline.report.sweep_figures import plots_figure, view_figure
+    from hoseline.report.sweep_html import sweep_report_html
+
+    result = on_and_through_the_floor[0]
+    view = view_figure(result)
+    assert "floor (contact)" in [trace.name for trace in view.data]
+    [points] = [trace for trace in view.data if trace.name and trace.name.startswith("contact with floor")]
+    last = view.frames[-1]
+    [shown] = [change for change, index in zip(last.data, last.traces) if view.data[index] is points]
+    floor = result.contacts[0]
+    np.testing.assert_allclose(np.column_stack([shown.x, shown.y, shown.z]), floor.points[-1], atol=1e-3)
+    np.testing.assert_allclose(shown.marker.color, floor.forces[-1], rtol=1e-6)
+    assert np.isclose(np.sum(floor.forces[-1]), np.linalg.norm(floor.total_force[-1]))  # all along the normal
+    assert len(view.frames[0].data[view.frames[0].traces.index(view.data.index(points))].x) == 0  # not yet touching
+    titles = [annotation.text for annotation in plots_figure(result).layout.annotations]
+    assert "contact push [N]" in titles and "length in contact [mm]" in titles
+    assert "contact with floor" in sweep_report_html(result)

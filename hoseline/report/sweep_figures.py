@@ -11,12 +11,16 @@ import numpy as np
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
 
+from hoseline.procedures.geometry.contact_shapes import contact_meshes
 from hoseline.procedures.sweep.result import SweepResult
 
 MAX_FRAMES = 200  # poses shown by the slider of the 3D view (evenly picked; the plots show all)
 LOCKED_COLOUR = "#1f4e9c"
 FREE_COLOUR = "#e07b00"
 OBSTACLE_COLOUR = "#9a9a9a"
+CONTACT_OBSTACLE_COLOUR = "#a0764a"  # the [contact] obstacles the hose rests on
+CONTACT_COLOURS = "YlOrRd"  # contact points, by the size of the push
+PLANE_MARGIN = 1.2  # a [contact] plane is drawn as a square this many times the span of the hose over the sweep
 OK_COLOUR = "#2a9d3c"
 VIOLATION_COLOUR = "#d62828"
 MOUNT_ARROW = 20.0  # mm, length of the arrows along the fitting directions
@@ -41,7 +45,8 @@ def travel_axis(result: SweepResult) -> tuple[np.ndarray, str]:
 
 
 def view_figure(result: SweepResult) -> go.Figure:
-    """3D view: obstacles, the hose, its mounts and the nearest approaches, with a slider through the poses."""
+    """3D view: obstacles (and [contact] obstacles), the hose, its mounts, the nearest approaches and the contact
+    points, with a slider through the poses."""
     sweep = result.sweep
     figure = go.Figure()
     moving = []  # (trace index, obstacle) of obstacles that move with a body
@@ -52,6 +57,12 @@ def view_figure(result: SweepResult) -> go.Figure:
                                    name=obstacle.name, showlegend=True, hoverinfo="name", flatshading=True))
         if obstacle.body is not None:
             moving.append((len(figure.data) - 1, obstacle))
+    span = np.ptp(result.centerlines.reshape(-1, 3), axis=0).max()
+    for mesh in contact_meshes(sweep.problem, PLANE_MARGIN * span / sweep.problem.hose.length):
+        x, y, z = _single(mesh.vertices).T
+        i, j, k = mesh.faces.T
+        figure.add_trace(go.Mesh3d(x=x, y=y, z=z, i=i, j=j, k=k, color=CONTACT_OBSTACLE_COLOUR, opacity=0.35,
+                                   name=f"{mesh.name} (contact)", showlegend=True, hoverinfo="name", flatshading=True))
     for clearance in result.clearances:  # the worst approach of all poses, marked once
         k = clearance.worst
         pair = np.vstack([clearance.on_hose[k], clearance.on_obstacle[k]])
@@ -90,7 +101,8 @@ def view_figure(result: SweepResult) -> go.Figure:
 
 
 def _pose_traces(result: SweepResult, k: int) -> list:
-    """The traces that change from pose to pose, as shown at pose k: the hose(s), the mounts, the nearest approaches."""
+    """The traces that change from pose to pose, as shown at pose k: the hose(s), the mounts, the nearest approaches,
+    the contact points."""
     traces = [go.Scatter3d(mode="lines", name="hose (both ends clamped)", line=dict(color=LOCKED_COLOUR, width=9),
                            customdata=_single(result.s), hovertemplate="s = %{customdata:.1f} mm<extra>hose</extra>")]
     if result.free_centerlines is not None:
@@ -100,6 +112,11 @@ def _pose_traces(result: SweepResult, k: int) -> list:
                                marker=dict(size=3, color="black"), hoverinfo="name"))
     traces.extend(go.Scatter3d(mode="lines+markers", showlegend=False, line=dict(width=4), marker=dict(size=3))
                   for _ in result.clearances)
+    largest = max([float(np.max(f)) for c in result.contacts for f in c.forces if f.size] + [1e-12])
+    traces.extend(go.Scatter3d(mode="markers", name=f"contact with {contact.name} (colour: push, N)",
+                               marker=dict(size=5, color=[], colorscale=CONTACT_COLOURS, cmin=0.0, cmax=largest,
+                                           showscale=n == 0, colorbar=dict(title="contact push [N]", x=1.0, len=0.5)))
+                  for n, contact in enumerate(result.contacts))
     for trace, change in zip(traces, _pose_changes(result, k)):
         trace.update(change)
     return traces
@@ -119,6 +136,11 @@ def _pose_changes(result: SweepResult, k: int) -> list:
         label = f"{clearance.obstacle.name}: {clearance.distance[k]:.1f} mm<extra></extra>"
         changes.append(go.Scatter3d(x=x, y=y, z=z, line=dict(color=OK_COLOUR if ok else VIOLATION_COLOUR),
                                     hovertemplate=label))
+    for contact in result.contacts:  # where the hose presses on each [contact] obstacle, coloured by the push
+        x, y, z = _single(contact.points[k]).reshape(-1, 3).T
+        forces = _single(contact.forces[k])
+        changes.append(go.Scatter3d(x=x, y=y, z=z, marker=dict(color=forces), customdata=forces,
+                                    hovertemplate=f"{contact.name}: %{{customdata:.3g}} N<extra></extra>"))
     return changes
 
 
@@ -137,16 +159,17 @@ def _moved_obstacles(result: SweepResult, k: int, moving) -> list:
 
 
 def plots_figure(result: SweepResult) -> go.Figure:
-    """Clearance (if there are obstacles), bend radius, twisting moment, separation (if compared) and
-    reactions against travel."""
+    """Clearance (if there are obstacles), contact push and length (with [contact]), bend radius, twisting
+    moment, separation (if compared) and reactions against travel."""
     x, label = travel_axis(result)
     x = _single(x)
     labels = [result.travel_label(k) for k in range(result.pose_count)]
     clearance, bend, twist, separation, reactions = (
         "clearance to the obstacles [mm]", "smallest bend radius (inside) [mm]", "twisting moment [N*mm]",
         "end free to spin: separation [mm]", "mount reactions [N]")
-    panels = ([clearance] if result.clearances else []) + [bend, twist] + \
-        ([separation] if result.separation is not None else []) + [reactions]  # no empty panels
+    pushes, lying = "contact push [N]", "length in contact [mm]"
+    panels = ([clearance] if result.clearances else []) + ([pushes, lying] if result.contacts else []) + \
+        [bend, twist] + ([separation] if result.separation is not None else []) + [reactions]  # no empty panels
     figure = make_subplots(rows=len(panels), cols=1, shared_xaxes=True, subplot_titles=panels, vertical_spacing=0.05)
     labelled = set()  # rows whose first curve carries the pose names for the hover
 
@@ -170,6 +193,9 @@ def plots_figure(result: SweepResult) -> go.Figure:
         add(clearance, near.distance, near.obstacle.name)
     for near in result.clearances:
         add_limit(clearance, near.obstacle.clearance, f"required for {near.obstacle.name}")
+    for contact in result.contacts:
+        add(pushes, np.linalg.norm(contact.total_force, axis=1), f"{contact.name}")
+        add(lying, contact.length_in_contact, f"{contact.name}")
     add(bend, result.min_bend_radius, "smallest bend radius")
     limit = result.sweep.problem.hose.min_bend_radius
     if limit is not None:

@@ -47,8 +47,10 @@ SLIDER_LINK = """
 
 VIEW_LEGEND = ("<p>Drag the slider to step through the poses. Blue: the hose with both ends clamped and the twist locked "
                "at assembly.{free} Green/red lines: the nearest approach to each obstacle (red below the required "
-               "clearance); crosses: the worst approach over the whole sweep.</p>")
+               "clearance); crosses: the worst approach over the whole sweep.{contact}</p>")
 FREE_LEGEND = " Dashed orange: the same hose with its end fitting free to spin (the common modelling error)."
+CONTACT_LEGEND = (" Brown: the obstacles of [contact], which the hose rests on and never enters; dots: where it presses "
+                  "on them at the pose shown, coloured by the push (N).")
 
 
 def sweep_report_html(result: SweepResult, input_text: str = "", performance: dict | None = None,
@@ -73,7 +75,7 @@ def sweep_report_html(result: SweepResult, input_text: str = "", performance: di
         '<p class="subtitle">hoseline sweep report</p>',
         _verdict(result),
         "<h2>3D view</h2>",
-        VIEW_LEGEND.format(free=free),
+        VIEW_LEGEND.format(free=free, contact=CONTACT_LEGEND if result.contacts else ""),
         figure_div(VIEW_ID, view_figure(result)),
         "<h2>Along the sweep</h2>",
         figure_div(PLOTS_ID, plots_figure(result)),

@@ -55,8 +55,10 @@ def plot_sweep_view(result: SweepResult, path_png: str | Path) -> Path:
     axes_3d.set(xlabel="x [mm]", ylabel="y [mm]", zlabel="z [mm]", title="hose through the sweep (grey: other poses)")
     everything = np.vstack([result.centerlines.reshape(-1, 3)] + [t.reshape(-1, 3) for t in meshes])
     low, high = everything.min(axis=0), everything.max(axis=0)
+    flat = 0.5 * result.sweep.problem.hose.outer_diameter  # a planar sweep spans nothing across its plane
+    low, high = low - flat, high + flat
     axes_3d.set(xlim=(low[0], high[0]), ylim=(low[1], high[1]), zlim=(low[2], high[2]))
-    axes_3d.set_box_aspect(high - low + 1.0)
+    axes_3d.set_box_aspect(high - low)
     axes_3d.legend(loc="upper left")
     return write_bytes(path_png, png_bytes(figure))
 

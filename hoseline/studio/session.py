@@ -34,11 +34,11 @@ from hoseline.model.motion import Pose, quaternion_matrix
 from hoseline.model.problem import Problem
 from hoseline.model.sweep import DEFAULT_CLEARANCE, Obstacle, SweepProblem
 from hoseline.procedures.geometry.clearance import TriangleIndex
+from hoseline.procedures.geometry.contact_shapes import SOURCE as CONTACT_SOURCE, contact_meshes
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.tracking import Fittings, Step, Tracker, twisted
-from hoseline.studio.contact_shapes import SOURCE as CONTACT_SOURCE, contact_meshes
 from hoseline.studio.messages import HoseTarget, Target
 from hoseline.studio.ports import PortAnchor, piece_outline
 from hoseline.studio.view import placement_comparison, session_message, state_message

@@ -313,6 +313,8 @@ def _per_obstacle(touching: list) -> list[SweepContact]:
             min_gap=np.array([pose[j].min_gap for pose in touching]),
             total_force=np.array([pose[j].total_force for pose in touching]),
             length_in_contact=np.array([pose[j].length_in_contact for pose in touching]),
+            points=[pose[j].point for pose in touching],
+            forces=[np.linalg.norm(pose[j].force, axis=1) for pose in touching],
         )
         for j, first in enumerate(touching[0])
     ]

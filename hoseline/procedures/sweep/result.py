@@ -48,7 +48,8 @@ class SweepContact:
     name, kind: as in the problem ("plane", "sphere", "cylinder"; "self").  min_gap: (M,) mm, the smallest
     gap between the hose surface and the obstacle (>= 0; inf if never near).  total_force: (M, 3) N, the
     obstacle's push on the hose.  length_in_contact: (M,) mm, at the resolution of the stations (see
-    placement/result.ObstacleContact).
+    placement/result.ObstacleContact).  points, forces: per pose, the contact points on the hose's
+    centreline (k, 3) mm and the size of the push at each (k,) N (k may differ from pose to pose).
     """
 
     name: str
@@ -56,6 +57,8 @@ class SweepContact:
     min_gap: np.ndarray
     total_force: np.ndarray
     length_in_contact: np.ndarray
+    points: list[np.ndarray] = field(default_factory=list)
+    forces: list[np.ndarray] = field(default_factory=list)
 
 
 @dataclass

@@ -1,8 +1,8 @@
 """Triangle meshes of a problem's contact obstacles (model/obstacles.py), to draw them and measure clearance to them.
 
-The solver keeps the hose out of the exact analytic shapes; the page needs triangles to draw,
-and the clearance readouts and colour map measure to the same triangles (required clearance 0:
-the hose may touch them).  Spheres and capsules are tessellated finely enough that the facets lie
+The solver keeps the hose out of the exact analytic shapes; the studio and the sweep report need
+triangles to draw, and the studio's clearance readouts and colour map measure to the same
+triangles (required clearance 0: the hose may touch them).  Spheres and capsules are tessellated finely enough that the facets lie
 within 0.5 % of the radius of the true surface (inside it: a tessellation's vertices are on the
 surface, its faces inside), so the drawn clearance of a touching hose reads a little over zero,
 never under.  A plane is drawn as a square about the hose's mounts, `PLANE_EXTENT` hose lengths
@@ -21,10 +21,13 @@ PLANE_EXTENT = 4.0  # the drawn square of a plane, in hose lengths
 SOURCE = "[contact]"  # the source of these meshes (they come from the problem file's contact table)
 
 
-def contact_meshes(problem: Problem) -> list[MeshObstacle]:
-    """One mesh per obstacle of problem.contact, named as the obstacle, required clearance 0 (mm)."""
+def contact_meshes(problem: Problem, plane_extent: float = PLANE_EXTENT) -> list[MeshObstacle]:
+    """One mesh per obstacle of problem.contact, named as the obstacle, required clearance 0 (mm).
+
+    plane_extent: the side of a plane's square, in hose lengths.
+    """
     centre = 0.5 * (problem.start.point + problem.end.point)
-    return [_mesh(obstacle, centre, PLANE_EXTENT * problem.hose.length) for obstacle in problem.contact]
+    return [_mesh(obstacle, centre, plane_extent * problem.hose.length) for obstacle in problem.contact]
 
 
 def _mesh(obstacle: Obstacle, centre: np.ndarray, extent: float) -> MeshObstacle:
