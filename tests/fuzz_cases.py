@@ -304,8 +304,9 @@ def feasible_problem(draw, largest_length: float = 9e4, largest_segments: int = 
     end = start + draw(st.floats(0.0, 0.98)) * length * direction / np.linalg.norm(direction)
     hose = {
         "length": length, "outer_diameter": diameter, "bending_stiffness": bending,
-        # GJ = factor EI / 1.5 stays within the stiffness range too
-        "torsion_factor": draw(_log_uniform(max(1e-3, 1.5e-3 / bending), min(1e3, 1.5e12 / bending))),
+        # GJ = factor EI / 1.5 stays within the stiffness range too (with room for the rounding of factor * EI / 1.5)
+        "torsion_factor": draw(_log_uniform(max(1e-3, 1.5e-3 / bending * (1.0 + 1e-9)),
+                                            min(1e3, 1.5e12 / bending * (1.0 - 1e-9)))),
         "segments": draw(st.integers(4, largest_segments)),
         "mass_per_length": draw(st.one_of(st.just(0.0), _log_uniform(1e-3, 1e3))),
     }

@@ -152,5 +152,15 @@ def test_a_torsional_stiffness_computed_below_the_range_is_refused(thesis_dict):
     """EI = 1 N*mm^2 and torsion_factor 1e-3 are each in range; the GJ they give (6.7e-4 N*mm^2) is not."""
     del thesis_dict["hose"]["torsional_stiffness"]
     thesis_dict["hose"].update(bending_stiffness=1.0, torsion_factor=1e-3)
-    with pytest.raises(ProblemFileError, match=r"hose.torsion_factor = 0.001 gives GJ = 0.000667 N\*mm\^2, outside"):
+    with pytest.raises(ProblemFileError, match=r"hose.torsion_factor = 0.001 gives GJ = 0.000667 N\*mm\^2, outside"
+                                               r".*give a larger torsion_factor"):
+        problem_from_dict(thesis_dict)
+
+
+def test_a_torsional_stiffness_computed_above_the_range_asks_for_a_smaller_factor(thesis_dict):
+    """Found by the fuzz campaign: EI = 1e11 N*mm^2 with factor 15 gives GJ a rounding over 1e12 N*mm^2; the fix named
+    is a smaller factor, not a larger one."""
+    del thesis_dict["hose"]["torsional_stiffness"]
+    thesis_dict["hose"].update(bending_stiffness=1e11, torsion_factor=15.000000000000004)
+    with pytest.raises(ProblemFileError, match=r"gives GJ = 1e\+12 N\*mm\^2, outside .*give a smaller torsion_factor"):
         problem_from_dict(thesis_dict)

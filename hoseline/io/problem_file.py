@@ -429,7 +429,8 @@ class HoseSection(_Section):
             named = ", ".join(f"hose.{key} = {_show(value)}" for key, value in given.items() if value is not None)
             raise ValueError(
                 f"{named or 'the default torsion'} gives GJ = {torsional:.3g} N*mm^2, outside {low:g}-{high:g} N*mm^2 "
-                f"({_STIFFNESSES}): give a larger torsion_factor or torsional_stiffness"
+                f"({_STIFFNESSES}): give a {'smaller' if torsional > high else 'larger'} torsion_factor or "
+                "torsional_stiffness"
             )
         low, high = limits.STIFFNESS_RATIO
         for keys, ratio, reference in checks:
