@@ -128,3 +128,17 @@ def test_demo_mounts_come_from_the_thesis_iges_file():
     np.testing.assert_allclose(problem.end.direction, [1.0, 0.0, 0.0])  # D -> C
     assert problem.hose.bending_stiffness == pytest.approx(149563.0, rel=1e-6)
     assert problem.hose.torsional_stiffness == pytest.approx(2454930.0, rel=1e-6)
+
+
+def test_the_command_line_starts_without_the_heavy_libraries():
+    """`hoseline --help` and every command start fast (issue 9: <= 0.5 s) because the heavy libraries load only where
+    they are used; a module-level import of one of them anywhere on the way to the commands breaks that unseen."""
+    import subprocess
+    import sys
+
+    heavy = ["scipy", "numba", "OCP", "plotly", "matplotlib", "trimesh", "skimage", "dask", "distributed", "uvicorn",
+             "starlette"]
+    code = ("import sys, hoseline.cli; hoseline.cli.app; "
+            f"print(','.join(m for m in {heavy!r} if m in sys.modules))")
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert loaded == "", f"importing the command line loads {loaded}"

@@ -12,7 +12,6 @@ from rich.console import Console
 from hoseline.commands.common import (BAD_INPUT, OUT_HELP, QUIET_HELP, compile_solver, errors_to_exit_codes, fail,
                                       progress_bar, read_input)
 from hoseline.io.export_names import FILE_NAMES, parse_formats
-from hoseline.model import limits
 
 HYSTERESIS_STEP_DEG = 10.0  # largest twist step of --hysteresis, degrees
 
@@ -94,6 +93,8 @@ def accuracy_mm(text: str) -> float:
 
 def twist_deg(text: str) -> float:
     """The --hysteresis value in degrees ("720deg" or "720"), or exit 2 saying what to give."""
+    from hoseline.model import limits
+
     number = text.strip().lower().removesuffix("deg").strip()
     try:
         value = float(number)

@@ -24,7 +24,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 
 @dataclass(frozen=True)
@@ -81,6 +80,8 @@ def rest_rotations(darboux: np.ndarray, segment_length: float) -> np.ndarray:
     magnitude = np.linalg.norm(darboux, axis=1)
     angle = 2.0 * np.arctan(0.5 * lengths * magnitude)
     axis = np.divide(darboux, magnitude[:, None], out=np.zeros_like(darboux), where=magnitude[:, None] > 0.0)
+    from scipy.spatial.transform import Rotation  # here, not at the top: the command line starts without SciPy
+
     return Rotation.from_rotvec(axis * angle[:, None]).as_matrix()
 
 
