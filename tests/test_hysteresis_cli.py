@@ -23,9 +23,9 @@ def problem_file(tmp_path_factory):
     return path
 
 
-def solve_with_hysteresis(problem_file, out, largest):
-    """(exit code, output, rows of hysteresis.csv as float arrays keyed by column)."""
-    result = runner.invoke(cli.app, ["solve", str(problem_file), "-o", str(out), "--hysteresis", largest])
+def solve_with_hysteresis(problem_file, out, largest, *options):
+    """(output, rows of hysteresis.csv as float arrays keyed by column)."""
+    result = runner.invoke(cli.app, ["solve", str(problem_file), "-o", str(out), "--hysteresis", largest, *options])
     assert result.exit_code == 0, result.output
     assert f"wrote {out / 'hysteresis.csv'}" in result.output
     with open(out / "hysteresis.csv", newline="") as handle:
@@ -75,4 +75,25 @@ def test_a_problem_with_contact_is_refused(problem_file, tmp_path):
     touching.write_text(problem_file.read_text(encoding="utf-8") + "\n[contact]\nself = true\n", encoding="utf-8")
     result = runner.invoke(cli.app, ["solve", str(touching), "-o", str(tmp_path / "out"), "--hysteresis", "90"])
     assert result.exit_code == 2 and "--hysteresis does not take contact yet" in result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_joint_friction_leaves_a_set_at_zero_twist_that_the_elastic_model_does_not(tmp_path):
+    """The friction model from the command line, as tests/test_hysteresis.py checks it in Python: the 20-segment thesis
+    hose twisted to 180 deg and back with a threshold of 2000 N*mm (the largest joint moment is about 3600) keeps a set
+    back at 0 deg; with a threshold above every moment it is the elastic model (no band)."""
+    path = tmp_path / "brake20.toml"
+    path.write_text(problem_to_toml(thesis_problem(20)), encoding="utf-8")
+    output, columns = solve_with_hysteresis(path, tmp_path / "friction", "180", "--friction-threshold", "2000")
+    assert columns["twist_deg"][0] == 0.0 and columns["largest_band_mm"][0] > 10.0  # mm (measured 44 in Python)
+    assert columns["largest_band_mm"][-1] < 1e-9  # the top of the path is one shape
+    assert "joint friction 2000 N*mm" in " ".join(output.split())
+    _, stiff = solve_with_hysteresis(path, tmp_path / "elastic", "180", "--friction-threshold", "1e9")
+    assert np.max(stiff["largest_band_mm"]) < 1e-6
+
+
+@pytest.mark.parametrize("options", [["--friction-threshold", "2000"], ["--hysteresis", "90", "--friction-threshold", "-5"]])
+def test_a_friction_threshold_needs_hysteresis_and_a_positive_moment(problem_file, tmp_path, options):
+    result = runner.invoke(cli.app, ["solve", str(problem_file), "-o", str(tmp_path / "out"), *options])
+    assert result.exit_code == 2 and "--friction-threshold" in result.output
     assert not (tmp_path / "out").exists()

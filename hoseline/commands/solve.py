@@ -32,7 +32,11 @@ def solve_command(
     hysteresis: str = typer.Option(None, "--hysteresis", metavar="MAX_DEG",
                                    help="also twist the placed hose from 0 to MAX_DEG degrees and back (steps of at "
                                         "most 10 deg) and write hysteresis.csv: the band between the two ways per "
-                                        "station at each twist (elastic model)"),
+                                        "station at each twist (elastic model, or with --friction-threshold)"),
+    friction_threshold: float = typer.Option(None, "--friction-threshold", metavar="N_MM",
+                                             help="with --hysteresis: the joints' internal-friction threshold, N*mm "
+                                                  "(elastic-perfectly plastic joints whose set slides; docs/model.md, "
+                                                  "Hysteresis); without it the elastic model"),
 ) -> None:
     """Place the hose of a problem file; write centerline.csv, result.json, the exports asked for (and
     hysteresis.csv with --hysteresis)."""
@@ -49,6 +53,10 @@ def solve_command(
     formats = export_formats(export)
     wanted = None if accuracy is None else accuracy_mm(accuracy)
     largest_twist = None if hysteresis is None else twist_deg(hysteresis)
+    if friction_threshold is not None and (largest_twist is None or not (math.isfinite(friction_threshold)
+                                                                         and friction_threshold > 0.0)):
+        raise fail(f"--friction-threshold {friction_threshold:g}: give a positive moment in N*mm, together with "
+                   "--hysteresis MAX_DEG (it sets the friction of the twist up and back)", BAD_INPUT)
     problem = read_input(load_problem, problem_file, "problem file", (ProblemFileError,))
     if largest_twist is not None and problem.has_contact:
         raise fail("--hysteresis does not take contact yet (the twist continuation does not keep the hose out of the "
@@ -60,7 +68,8 @@ def solve_command(
                 result = solve(problem, progress=progress)
             else:
                 result = solve_to_accuracy(problem, wanted, progress=progress)
-        band = None if largest_twist is None else hysteresis_band(problem, largest_twist, hysteresis_step(largest_twist))
+        band = None if largest_twist is None else hysteresis_band(problem, largest_twist, hysteresis_step(largest_twist),
+                                                                  friction_threshold)
         with staged_directory(out) as staging:
             write_results(result, staging)
             exported = write_exports(result, staging, formats)
@@ -72,7 +81,7 @@ def solve_command(
             print_lengths(problem)
         print_contacts(result)
         if band is not None:
-            print_hysteresis(band, largest_twist)
+            print_hysteresis(band, largest_twist, friction_threshold)
         Console().print(f"wrote {out / 'centerline.csv'} and {out / 'result.json'}")
         if band is not None:
             Console().print(f"wrote {out / HYSTERESIS_FILE}", soft_wrap=True)
@@ -111,9 +120,10 @@ def hysteresis_step(largest_twist_deg: float) -> float:
     return abs(largest_twist_deg) / math.ceil(abs(largest_twist_deg) / HYSTERESIS_STEP_DEG - 1e-9)
 
 
-def print_hysteresis(band, largest_twist_deg: float) -> None:
+def print_hysteresis(band, largest_twist_deg: float, friction_threshold: float | None = None) -> None:
     """The summary line of the hysteresis band (procedures/placement/hysteresis.HysteresisBand): the largest band
-    (mm) and the twist (degrees) where it is, or why the twist stopped early."""
+    (mm) and the twist (degrees) where it is, or why the twist stopped early; friction_threshold: N*mm, or None
+    for the elastic model."""
     console = Console()
     if band.failure:
         console.print(f"[yellow]hysteresis: the twist to {largest_twist_deg:g} deg and back stopped early: "
@@ -122,7 +132,9 @@ def print_hysteresis(band, largest_twist_deg: float) -> None:
         console.print("hysteresis: no twist was reached both ways; hysteresis.csv holds the header only")
         return
     widest = int(np.argmax(band.width))
-    console.print(f"hysteresis (twisted to {largest_twist_deg:g} deg and back): largest band {band.width[widest]:.4g} mm "
+    model = "elastic" if friction_threshold is None else f"joint friction {friction_threshold:g} N*mm"
+    console.print(f"hysteresis (twisted to {largest_twist_deg:g} deg and back, {model}): largest band "
+                  f"{band.width[widest]:.4g} mm "
                   f"at {band.twists_deg[widest]:g} deg twist", soft_wrap=True)
 
 
