@@ -20,6 +20,10 @@
     distribution = "cone"              #   cone (angle: uniform within it), normal (sigma per axis)
     angle = 2.0
     [[vary]]
+    parameter = "clips[0].point"       # a clip of the base, numbered from 0 in its order: clips[k].point (mm, as
+    distribution = "sphere"            #   start.point) and clips[k].direction (degrees, as end.direction; not for
+    radius = 0.5                       #   a ball clip)
+    [[vary]]
     parameter = "hose.length"          # mm, or unit = "%" of the length
     distribution = "uniform"           #   normal (sigma), uniform (range = [low, high])
     range = [-4.0, 2.0]
@@ -69,7 +73,8 @@ from hoseline.procedures.variation.design_search import DesignGrid, default_rank
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
 from hoseline.procedures.variation.samples import StudyBase
 from hoseline.procedures.variation.study import Sampling, Study
-from hoseline.procedures.variation.tolerances import DISTRIBUTIONS, PARAMETERS, Tolerance, Variation
+from hoseline.procedures.variation.tolerances import (DISTRIBUTIONS, PARAMETERS, Tolerance, Variation, clip_index,
+                                                      parameter_kind)
 
 MAX_SAMPLES = 10_000_000  # beyond this the stored samples would not fit in memory
 MAX_CANDIDATES = 100_000
@@ -163,7 +168,11 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
     spec = _validated(StudyFile, data, str(path), error=StudyFileError)
     base_path = path.parent / spec.base
     base, text = _base(base_path, str(path), spec.base)
-    variation = Variation(tuple(_tolerance(item, k, base, str(path)) for k, item in enumerate(spec.vary)))
+    variation = Variation(tuple(_tolerance(item, k, base, str(path)) for k, item in enumerate(spec.vary)),
+                          clips=len(base.problem.clips))
+    if base.problem.clips and spec.sampling.start == "nominal":
+        raise StudyFileError(f"{path}: sampling.start = \"nominal\" with clips in the base: the warm start from the "
+                             "nominal hose does not carry clips yet; use start = \"straight\" (the published placement)")
     limits = _limits(spec.limits, base, str(path))
     sampling = Sampling(spec.sampling.method, spec.sampling.samples if spec.vary else 0, spec.sampling.seed,
                         spec.sampling.batch, spec.sampling.start)
@@ -199,10 +208,18 @@ def _scalar(value, name: str) -> float:
 def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Tolerance:
     """The Tolerance of one [[vary]] entry."""
     where = f"{source}: vary[{k}] ({item.parameter})"
-    if item.parameter not in PARAMETERS:
+    try:
+        kind = parameter_kind(item.parameter)[0]
+    except ValueError:
         raise StudyFileError(f"{source}: vary[{k}].parameter = \"{item.parameter}\": unknown; choose one of "
-                             f"{', '.join(PARAMETERS)}")
-    kind = PARAMETERS[item.parameter][0]
+                             f"{', '.join(PARAMETERS)}, clips[k].point or clips[k].direction") from None
+    clip = clip_index(item.parameter)
+    clips = base.problem.clips
+    if clip is not None and clip >= len(clips):
+        raise StudyFileError(f"{where}: the base has {len(clips)} clip(s), numbered from 0: give clips[0] to "
+                             f"clips[{len(clips) - 1}]" if clips else f"{where}: the base has no clips")
+    if clip is not None and kind == "tilt" and not clips[clip].holds_direction:
+        raise StudyFileError(f"{where}: clip {clip} is a ball clip: it holds the position only, vary clips[{clip}].point")
     if item.distribution not in DISTRIBUTIONS[kind]:
         raise StudyFileError(f"{where}: distribution = \"{item.distribution}\" does not apply; choose one of "
                              f"{', '.join(DISTRIBUTIONS[kind])}")

@@ -30,7 +30,6 @@ from hoseline.io.results import _json, _plain
 from hoseline.io.sweep_results import _cell
 from hoseline.procedures.variation.statistics import PERCENTILES
 from hoseline.procedures.variation.study import Study, StudyOutcome
-from hoseline.procedures.variation.tolerances import COORDINATE_UNITS, COORDINATES
 
 PARTIAL = ".partial"
 SWEEP_TABLES = ("bodies", "obstacles", "sweep")
@@ -100,8 +99,9 @@ def samples_csv(outcome: StudyOutcome) -> str:
         "status": np.where(samples["failed"], "failed", "solved"),
         "reason": samples["reason"],
     }
-    for k in outcome.study.variation.varied:
-        columns[f"{COORDINATES[k]} [{COORDINATE_UNITS[k]}]"] = outcome.coordinates[:, k]
+    variation = outcome.study.variation
+    for k in variation.varied:
+        columns[f"{variation.names[k]} [{variation.units[k]}]"] = outcome.coordinates[:, k]
     for k, quantity in enumerate(outcome.study.quantities):
         columns[f"{quantity.name} [{quantity.unit}]"] = samples["values"][:, k]
     columns["snap-throughs"] = samples["snaps"]
@@ -144,9 +144,10 @@ def sensitivities_csv(outcome: StudyOutcome) -> str:
     """Per varied coordinate: the derivative of every smooth quantity (quantity unit per coordinate unit)."""
     derivatives, names = outcome.first_order.derivatives, outcome.first_order.names
     units = {q.name: q.unit for q in outcome.study.quantities}
-    varied = outcome.study.variation.varied
-    columns: dict[str, list | np.ndarray] = {"coordinate": [COORDINATES[k] for k in varied],
-                                             "unit": [COORDINATE_UNITS[k] for k in varied]}
+    variation = outcome.study.variation
+    varied = variation.varied
+    columns: dict[str, list | np.ndarray] = {"coordinate": [variation.names[k] for k in varied],
+                                             "unit": [variation.units[k] for k in varied]}
     for q, name in enumerate(names):
         columns[f"d {name} [{units[name]} per unit]"] = derivatives[q, list(varied)]
     return _table(columns)

@@ -66,18 +66,19 @@ class DesignGrid:
             raise ValueError(f"design method {self.method!r}: choose one of {', '.join(METHODS)}")
 
     def coordinates(self, nominal_length: float, nominal_twist: float, deviations: np.ndarray) -> np.ndarray:
-        """(L * C * S, 15) the deviations of every candidate (lengths outermost, then clockings) and sample.
+        """(L * C * S, width) the deviations of every candidate (lengths outermost, then clockings) and sample.
 
-        deviations: (S, 15) tolerance deviations applied to every candidate (S = 1 row of zeros without).
+        deviations: (S, width) tolerance deviations applied to every candidate (S = 1 row of zeros without;
+        width: tolerances.Variation.width).
         """
         return np.concatenate([candidate_rows(length - nominal_length, clocking - nominal_twist, deviations)
                                for length in self.lengths for clocking in self.clockings])
 
 
 def candidate_rows(length_offset: float, clocking_offset: float, deviations: np.ndarray) -> np.ndarray:
-    """(S, 15) the deviations of one candidate: its length (mm) and clocking (deg) from the base's, plus each of
-    the tolerance deviations (S, 15)."""
-    offset = np.zeros(15)
+    """(S, width) the deviations of one candidate: its length (mm) and clocking (deg) from the base's, plus each of
+    the tolerance deviations (S, width)."""
+    offset = np.zeros(deviations.shape[1])
     offset[INDEX["hose.length"]] = length_offset
     offset[INDEX["end.twist"]] = clocking_offset
     return deviations + offset
@@ -181,7 +182,7 @@ def judge(grid: DesignGrid, limits: tuple[Limit, ...], names: list[str], samples
 @dataclass(frozen=True)
 class RefineTask:
     """What the optimiser needs for one length: length (mm), the bracket of clockings (deg) and the grid's best
-    clocking in it with its margins, the base's length (mm) and twist (deg), the tolerance deviations (S, 15)
+    clocking in it with its margins, the base's length (mm) and twist (deg), the tolerance deviations (S, width)
     judged per candidate, the limits, the quantities' names and the position of rank_by in the limits."""
 
     length: float

@@ -134,7 +134,7 @@ class Engine:
         on_batch: Callable[[int, dict[str, np.ndarray]], None],
         done: Collection[int] = (),
     ) -> None:
-        """Evaluate every batch of the samples with deviations `coordinates` (count, 15) not in `done`, handing
+        """Evaluate every batch of the samples with deviations `coordinates` (count, width) not in `done`, handing
         each to on_batch(k, arrays) (samples.evaluate_batch) as it finishes.
 
         batch_size: samples per batch (default_batch_size).  Raises whatever a batch raises beyond the

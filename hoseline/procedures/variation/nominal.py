@@ -72,6 +72,8 @@ def nominal_placement(problem: Problem) -> NominalPlacement:
     """
     if problem.hose.stiffeners is not None:
         raise ValueError("the stiffener springs are not covered (they are phased in after the lock)")
+    if problem.clips:
+        raise ValueError("the clips are not covered (the nominal equilibria carried here hold the two fittings only)")
     props, final, state, lock_angle_deg = place_only(problem)
     if problem.end_twist_deg == 0.0:
         placed = state

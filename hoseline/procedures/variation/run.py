@@ -75,7 +75,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         design_samples = None
         if study.design is not None:
             grid = study.design
-            deviations = coordinates[:grid.samples] if grid.samples else np.zeros((1, 15))
+            deviations = coordinates[:grid.samples] if grid.samples else np.zeros((1, study.variation.width))
             rows = grid.coordinates(study.base.problem.hose.length, study.base.problem.end_twist_deg, deviations)
             tick = time.perf_counter()
             cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose

@@ -130,7 +130,7 @@ def _read(context: StudyContext, index: int, deviation: np.ndarray) -> tuple[Pos
 
 
 def evaluate_batch(context: StudyContext, indices: np.ndarray, coordinates: np.ndarray) -> dict[str, np.ndarray]:
-    """Solve and read the samples `indices` with the deviations `coordinates` (b, 15) from the base problem.
+    """Solve and read the samples `indices` with the deviations `coordinates` (b, width) from the base problem.
 
     Returns arrays with one row per sample: index, failed (bool), reason (text, "" when solved),
     snaps (snap-throughs along a sweep), warm (started by Newton from the nominal hose), branch_distance

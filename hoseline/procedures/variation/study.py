@@ -75,9 +75,9 @@ class Study:
         return quantities(self.base.obstacle_names)
 
     def coordinates(self) -> np.ndarray:
-        """(count, 15) the deviations of every sample (empty without tolerances)."""
+        """(count, width) the deviations of every sample (empty without tolerances)."""
         if not self.variation.tolerances or self.sampling.count == 0:
-            return np.zeros((0, 15))
+            return np.zeros((0, self.variation.width))
         unit = unit_design(self.sampling.method, self.sampling.count, self.variation.dimensions, self.sampling.seed)
         return self.variation.coordinates(unit)
 
@@ -108,7 +108,7 @@ class StudyOutcome:
     """Everything a study found.
 
     samples: the merged batch arrays (samples.evaluate_batch), rows in sample order; coordinates:
-    (n, 15) their deviations.  nominal: (q,) the nominal hose's quantities; nominal_centerlines
+    (n, width) their deviations (tolerances.Variation.width).  nominal: (q,) the nominal hose's quantities; nominal_centerlines
     (M, N+1, 3).  spreads: one per quantity.  probabilities, worst: per limit (worst: sample index).
     envelopes: per kept pose (base.shape_poses()) the station envelope (statistics.station_envelope).
     deviation: per station P5/P50/P95 (3, N+1) and the maximum (N+1,) of the distance from nominal, mm.

@@ -13,6 +13,12 @@ Every deviation is a value of one of the canonical coordinates (user units):
     hose.mass                                           ln of the factor on the mass per length
     end.twist                                           degrees added to the twist at assembly
 
+and, after them, five per clip of the problem (coordinate_names(clips)), in the problem's order:
+
+    clips[k].x, clips[k].y, clips[k].z                  mm, the clip point moved
+    clips[k].tilt_a, clips[k].tilt_b                    degrees, the clip's direction turned about its
+                                                        two section axes (a ball clip has none)
+
 A Tolerance maps its own dimensions of a point u of the unit hypercube onto some coordinates
 by the inverse distribution function, so one code serves Monte Carlo and space-filling designs
 alike; several tolerances on one parameter add up (a length tolerance and the change under
@@ -23,12 +29,14 @@ variance (sensitivity.py).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.special import ndtri
 
 from hoseline.mechanics.rotations import frame_from_tangent, rotation_matrix
+from hoseline.model.clips import Clip
 from hoseline.model.mounts import Mount
 from hoseline.model.problem import Problem
 
@@ -39,6 +47,39 @@ COORDINATES = (
 )
 COORDINATE_UNITS = ("mm",) * 3 + ("deg",) * 2 + ("mm",) * 3 + ("deg",) * 2 + ("mm", "ln", "ln", "ln", "deg")
 INDEX = {name: k for k, name in enumerate(COORDINATES)}
+CLIP_COORDINATES = ("x", "y", "z", "tilt_a", "tilt_b")  # per clip, after COORDINATES
+CLIP_UNITS = ("mm",) * 3 + ("deg",) * 2
+_CLIP_PARAMETER = re.compile(r"clips\[(\d+)\]\.(point|direction)")
+
+
+def coordinate_names(clips: int = 0) -> tuple[str, ...]:
+    """The canonical coordinates of a problem with `clips` clips: COORDINATES, then five per clip."""
+    return COORDINATES + tuple(f"clips[{k}].{name}" for k in range(clips) for name in CLIP_COORDINATES)
+
+
+def coordinate_units(clips: int = 0) -> tuple[str, ...]:
+    """The units of coordinate_names(clips)."""
+    return COORDINATE_UNITS + CLIP_UNITS * clips
+
+
+def clip_index(parameter: str) -> int | None:
+    """k of a parameter "clips[k].point" or "clips[k].direction", None for the other parameters."""
+    match = _CLIP_PARAMETER.fullmatch(parameter)
+    return None if match is None else int(match.group(1))
+
+
+def parameter_kind(parameter: str) -> tuple[str, tuple[int, ...]]:
+    """(kind, indexes of the canonical coordinates it moves) of a study parameter (PARAMETERS, or a clip's
+    "clips[k].point" / "clips[k].direction"); ValueError for an unknown one."""
+    if parameter in PARAMETERS:
+        kind, names = PARAMETERS[parameter]
+        return kind, tuple(INDEX[name] for name in names)
+    match = _CLIP_PARAMETER.fullmatch(parameter)
+    if match is None:
+        raise ValueError(f"unknown parameter {parameter!r}: choose one of {', '.join(PARAMETERS)}, "
+                         "clips[k].point or clips[k].direction")
+    first = len(COORDINATES) + len(CLIP_COORDINATES) * int(match.group(1))
+    return ("point", (first, first + 1, first + 2)) if match.group(2) == "point" else ("tilt", (first + 3, first + 4))
 
 Z95 = 1.959963984540054  # the standard normal's 97.5 % point: lognormal `factor` holds 95 % of the hoses
 
@@ -71,7 +112,8 @@ _EDGE = 1e-12  # unit points are kept this far inside (0, 1): the normal's inver
 class Tolerance:
     """One varied parameter and its distribution.
 
-    parameter: a key of PARAMETERS, e.g. "end.point".  distribution: a key of
+    parameter: a key of PARAMETERS, e.g. "end.point", or a clip's "clips[k].point" or
+    "clips[k].direction" (k from 0, in the problem's order).  distribution: a key of
     DISTRIBUTIONS[kind].  size: the distribution's parameters (DISTRIBUTIONS names them), user
     units: mm for points and length offsets, degrees for tilts and twists, factors (> 0,
     dimensionless) for stiffness and mass.  label: for reports, e.g. "length change under pressure".
@@ -88,9 +130,7 @@ class Tolerance:
     label: str = ""
 
     def __post_init__(self) -> None:
-        if self.parameter not in PARAMETERS:
-            raise ValueError(f"unknown parameter {self.parameter!r}: choose one of {', '.join(PARAMETERS)}")
-        kind = self.kind
+        kind = self.kind  # raises for an unknown parameter
         if self.distribution not in DISTRIBUTIONS[kind]:
             raise ValueError(f"{self.parameter}: distribution {self.distribution!r} does not apply; choose one of "
                              f"{', '.join(DISTRIBUTIONS[kind])}")
@@ -115,12 +155,12 @@ class Tolerance:
     @property
     def kind(self) -> str:
         """point, tilt, offset or factor."""
-        return PARAMETERS[self.parameter][0]
+        return parameter_kind(self.parameter)[0]
 
     @property
     def coordinates(self) -> tuple[int, ...]:
-        """Indexes into COORDINATES of what this tolerance moves."""
-        return tuple(INDEX[name] for name in PARAMETERS[self.parameter][1])
+        """Indexes into coordinate_names(clips) of what this tolerance moves."""
+        return parameter_kind(self.parameter)[1]
 
     @property
     def dimensions(self) -> int:
@@ -201,9 +241,34 @@ def _integral_log_squared(x: float) -> float:
 
 @dataclass(frozen=True)
 class Variation:
-    """All tolerances of a study, each with its own dimensions of the unit hypercube, in order."""
+    """All tolerances of a study, each with its own dimensions of the unit hypercube, in order.
+
+    clips: the number of clips of the problem varied (its coordinates: coordinate_names(clips)).
+    """
 
     tolerances: tuple[Tolerance, ...]
+    clips: int = 0
+
+    def __post_init__(self) -> None:
+        for tolerance in self.tolerances:
+            k = clip_index(tolerance.parameter)
+            if k is not None and k >= self.clips:
+                raise ValueError(f"{tolerance.parameter}: the problem has {self.clips} clip(s), numbered from 0")
+
+    @property
+    def width(self) -> int:
+        """How many canonical coordinates a deviation has: len(coordinate_names(clips))."""
+        return len(COORDINATES) + len(CLIP_COORDINATES) * self.clips
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The canonical coordinates, coordinate_names(clips)."""
+        return coordinate_names(self.clips)
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """Their units, coordinate_units(clips)."""
+        return coordinate_units(self.clips)
 
     @property
     def dimensions(self) -> int:
@@ -216,9 +281,9 @@ class Variation:
         return tuple(sorted({k for t in self.tolerances for k in t.coordinates}))
 
     def coordinates(self, unit: np.ndarray) -> np.ndarray:
-        """(n, len(COORDINATES)) deviations of the hoses at unit points (n, dimensions)."""
+        """(n, width) deviations of the hoses at unit points (n, dimensions)."""
         unit = np.atleast_2d(np.asarray(unit, dtype=float))
-        out = np.zeros((unit.shape[0], len(COORDINATES)))
+        out = np.zeros((unit.shape[0], self.width))
         column = 0
         for tolerance in self.tolerances:
             values = tolerance.values(unit[:, column:column + tolerance.dimensions])
@@ -227,15 +292,15 @@ class Variation:
         return out
 
     def mean(self) -> np.ndarray:
-        """(len(COORDINATES),) mean deviation."""
-        out = np.zeros(len(COORDINATES))
+        """(width,) mean deviation."""
+        out = np.zeros(self.width)
         for tolerance in self.tolerances:
             out[list(tolerance.coordinates)] += tolerance.mean()
         return out
 
     def covariance(self) -> np.ndarray:
-        """(len(COORDINATES), len(COORDINATES)) covariance of the deviations (tolerances independent)."""
-        out = np.zeros((len(COORDINATES), len(COORDINATES)))
+        """(width, width) covariance of the deviations (tolerances independent)."""
+        out = np.zeros((self.width, self.width))
         for tolerance in self.tolerances:
             index = np.array(tolerance.coordinates)
             out[np.ix_(index, index)] += tolerance.covariance()
@@ -249,17 +314,35 @@ def tilt_axes(direction: np.ndarray) -> np.ndarray:
 
 def _tilted(mount: Mount, offset: np.ndarray, tilt_deg: np.ndarray) -> Mount:
     """The mount moved by `offset` (mm) and its direction turned by `tilt_deg` about its tilt axes."""
-    direction = mount.direction
+    return Mount(mount.point + offset, _turned(mount.direction, tilt_deg))
+
+
+def _turned(direction: np.ndarray, tilt_deg: np.ndarray) -> np.ndarray:
+    """A unit direction turned by `tilt_deg` (degrees) about its two tilt axes."""
     if np.any(tilt_deg != 0.0):
-        turn = np.radians(tilt_deg) @ tilt_axes(direction)
-        direction = rotation_matrix(turn) @ direction
-    return Mount(mount.point + offset, direction)
+        return rotation_matrix(np.radians(tilt_deg) @ tilt_axes(direction)) @ direction
+    return direction
+
+
+def _moved_clips(clips: tuple[Clip, ...], deviation: np.ndarray) -> tuple[Clip, ...]:
+    """The clips moved by their coordinates in `deviation` (five per clip after COORDINATES; none: unmoved)."""
+    moved = []
+    for k, clip in enumerate(clips):
+        first = len(COORDINATES) + len(CLIP_COORDINATES) * k
+        if deviation.size <= first:
+            return tuple(moved) + clips[k:]
+        offset, tilt = deviation[first:first + 3], deviation[first + 3:first + 5]
+        if clip.direction is None and np.any(tilt != 0.0):
+            raise ValueError(f"clips[{k}].direction: a ball clip holds no direction to vary")
+        direction = None if clip.direction is None else _turned(clip.direction, tilt)
+        moved.append(replace(clip, point=clip.point + offset, direction=direction))
+    return tuple(moved)
 
 
 def perturbed(problem: Problem, deviation: np.ndarray) -> Problem:
-    """The problem of a hose with the deviations `deviation` ((len(COORDINATES),), user units) from `problem`.
+    """The problem of a hose with the deviations `deviation` ((15,) or (15 + 5 clips,), user units) from `problem`.
 
-    Raises ValueError when the hose no longer reaches its mounts (the Problem's own check).
+    Raises ValueError when the hose no longer reaches its mounts or clips (the Problem's own check).
     """
     c = np.asarray(deviation, dtype=float)
     hose = problem.hose
@@ -279,4 +362,5 @@ def perturbed(problem: Problem, deviation: np.ndarray) -> Problem:
         start=_tilted(problem.start, c[0:3], c[3:5]),
         end=_tilted(problem.end, c[5:8], c[8:10]),
         end_twist_deg=problem.end_twist_deg + c[INDEX["end.twist"]],
+        clips=_moved_clips(problem.clips, c),
     )
