@@ -215,9 +215,9 @@ def solve(
     props = rod_properties(problem)
     log = ContinuationLog()
     sequence = _Sequence(problem, props, control, progress)
-    state = _initial_buckle(sequence.place_props, sequence.path.place, control.first, sequence.path.axis, log)
-    state = sequence.clear_buckle(state, log)
-    final, state, lock_angle_deg, residual = sequence.finish(log, "place", control.first, state)
+    state, first = _initial_buckle(sequence.place_props, sequence.path.place, control.first, sequence.path.axis, log)
+    state = sequence.clear_buckle(state, first, log)
+    final, state, lock_angle_deg, residual = sequence.finish(log, "place", first, state)
 
     result = build_result(problem, props, final, state, lock_angle_deg, log, started, residual)
     if sequence.contact is not None:
@@ -273,12 +273,13 @@ class _Sequence:
         self.lock_angle_deg = 0.0
         self.contact = contact_placement.problem_contact_model(problem) if problem.has_contact else None
 
-    def clear_buckle(self, state: RodState, log: ContinuationLog) -> RodState:
-        """With contact, the first buckled shape (of `state` and the other sides relaxed at the first step) that
-        clears every obstacle, noted as an event when it is not `state`; `state` itself without contact."""
+    def clear_buckle(self, state: RodState, fraction: float, log: ContinuationLog) -> RodState:
+        """With contact, the first buckled shape (of `state` and the other sides relaxed at the first step, at
+        `fraction` of the place phase) that clears every obstacle, noted as an event when it is not `state`;
+        `state` itself without contact."""
         if self.contact is None or not log.forks:
             return state
-        clamps = self.path.place(self.control.first)
+        clamps = self.path.place(fraction)
         for other in log.forks[-1].others:
             if contact_placement.is_clear(self.props, clamps, state, self.contact):
                 break
@@ -392,8 +393,34 @@ def _remesh_sliding(props: RodProperties, final: Clamps, state: RodState, report
     return final, state, report
 
 
-def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.ndarray, log: ContinuationLog) -> RodState:
-    """Equilibrium at the first fraction of the place phase, where the straight hose has buckled.
+FIRST_STEP_HALVINGS = 3  # a first step with no stable buckled shape is tried again at half the fraction, this often
+
+
+def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.ndarray,
+                    log: ContinuationLog) -> tuple[RodState, float]:
+    """(equilibrium, fraction) at the first fraction of the place phase, where the straight hose has buckled.
+
+    Tried at `fraction` and, where no stable buckled shape is found there (a coarse hose whose clips pull
+    it far in one step), at half of it, up to FIRST_STEP_HALVINGS times; the fraction reached is returned.
+    """
+    first = fraction
+    for halving in range(FIRST_STEP_HALVINGS + 1):
+        state = _buckle_at(props, place_path, fraction, axis, log)
+        if state is not None:
+            if halving:
+                log.events.append(f"place: no stable buckled shape at the first step's fraction {first:g}; found at "
+                                  f"{fraction:g}")
+            return state, fraction
+        fraction *= 0.5
+    raise PlacementError(
+        f"placement phase 'place' failed at fraction {first:g}: no stable buckled shape was found for the first step "
+        f"from the straight hose (nor at {2 * fraction:g})"
+    )
+
+
+def _buckle_at(props: RodProperties, place_path, fraction: float, axis: np.ndarray,
+               log: ContinuationLog) -> RodState | None:
+    """The stable buckled equilibrium at `fraction` of the place phase, or None.
 
     Candidates: the clamped-clamped first buckling mode, bending about +axis and -axis
     (in the plane the end rotation bends the hose), with the amplitude that takes up the
@@ -435,10 +462,7 @@ def _initial_buckle(props: RodProperties, place_path, fraction: float, axis: np.
             f"(energy {energies} N*mm); kept the lowest"
         )
         return best
-    raise PlacementError(
-        f"placement phase 'place' failed at fraction {fraction:g}: no stable buckled shape was found for the "
-        "first step from the straight hose"
-    )
+    return None
 
 
 def _coarse_clamps(final: Clamps, state: RodState, segments: int, coarse_segments: int, length: float) -> Clamps | None:
@@ -507,7 +531,7 @@ def place_only(problem: Problem, control: StepControl = StepControl()) -> tuple[
     props = rod_properties(problem)
     log = ContinuationLog()
     sequence = _Sequence(problem, props, control, None)
-    state = _initial_buckle(sequence.place_props, sequence.path.place, control.first, sequence.path.axis, log)
-    state = sequence.clear_buckle(state, log)
-    final, state, lock_angle_deg, _ = sequence.finish(log, "place", control.first, state)
+    state, first = _initial_buckle(sequence.place_props, sequence.path.place, control.first, sequence.path.axis, log)
+    state = sequence.clear_buckle(state, first, log)
+    final, state, lock_angle_deg, _ = sequence.finish(log, "place", first, state)
     return props, final, state, lock_angle_deg
