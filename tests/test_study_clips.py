@@ -42,7 +42,11 @@ def test_a_clip_deviation_moves_its_point_and_turns_its_direction_by_the_angle_g
     assert math.degrees(math.acos(np.clip(clip.direction @ original, -1.0, 1.0))) == pytest.approx(3.0)
     b = tilt_axes(original)[1]
     assert abs(clip.direction @ b) < 1e-12  # turned about b: no component along it
-    assert perturbed(problem, deviation[:len(COORDINATES)]).clips == problem.clips  # without clip coordinates
+    [unmoved] = perturbed(problem, deviation[:len(COORDINATES)]).clips  # without clip coordinates
+    assert np.array_equal(unmoved.point, CLIP_POINT) and np.array_equal(unmoved.direction, original)
+    length = np.zeros(len(COORDINATES))
+    length[COORDINATES.index("hose.length")] = 4.0  # 1 % longer: the clip keeps its station, 1 % further along
+    assert perturbed(problem, length).clips[0].arc_length == pytest.approx(202.0)
 
 
 def test_a_clip_tolerance_is_sampled_like_a_mount_tolerance():
@@ -100,7 +104,7 @@ def test_a_study_varies_the_clip_and_every_sample_runs_through_its_moved_clip(tm
 @pytest.mark.parametrize("kind, text, message", [
     ("fixed", STUDY.replace("clips[0].point", "clips[2].point"), "the base has 1 clip(s), numbered from 0"),
     ("ball", STUDY, "clip 0 is a ball clip: it holds the position only"),
-    ("fixed", STUDY.replace("seed = 2", 'seed = 2\nstart = "nominal"'), 'start = "nominal" with clips'),
+    ("sliding", STUDY.replace("seed = 2", 'seed = 2\nstart = "nominal"'), 'start = "nominal" with a sliding clip'),
 ])
 def test_bad_clip_tolerances_are_refused_naming_the_fix(tmp_path, kind, text, message):
     (tmp_path / "problem.toml").write_text(problem_to_toml(clipped(kind)), encoding="utf-8")
@@ -110,3 +114,69 @@ def test_bad_clip_tolerances_are_refused_naming_the_fix(tmp_path, kind, text, me
     assert result.exit_code == 2
     assert message in " ".join(result.output.split())
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("kind", ["fixed", "rotating", "ball"])
+def test_sensitivities_with_a_clip_match_finite_differences_of_full_placements(kind):
+    """As tests/test_study_sensitivity.py without clips: d(quantity)/d(parameter) and d(station)/d(parameter) for the
+    mounts, the length (the clip keeps its station: its arc length stretches with the hose) and the clip's point and
+    direction, against central differences of whole placements from the straight hose (Richardson-extrapolated),
+    which find the end's and a fixed clip's lock angles afresh each time."""
+    from hoseline.procedures.placement.sequence import place_only
+    from hoseline.procedures.variation.samples import placement_readings
+    from hoseline.procedures.variation.sensitivity import placement_sensitivities, step_sizes
+
+    problem = clipped(kind)
+    names = coordinate_names(1)
+    wanted = ["end.x", "start.tilt_b", "hose.length", "hose.bending", "clips[0].y", "clips[0].z"]
+    wanted += [] if kind == "ball" else ["clips[0].tilt_a", "clips[0].tilt_b"]
+    varied = tuple(names.index(name) for name in wanted)
+    sensitivities = placement_sensitivities(problem, varied)
+    # 3e-5 of the scale (0.012 mm), Richardson-extrapolated: ten times the larger steps of the unclipped test moves
+    # the smallest bend radius of the fixed clip's hose to another station (a kink the reference would straddle)
+    steps = 300.0 * step_sizes(problem)
+
+    def readings(deviation: np.ndarray) -> np.ndarray:
+        hose = perturbed(problem, deviation)
+        props, clamps, state, _ = place_only(hose)
+        read = placement_readings(hose, props, clamps, state)
+        return np.concatenate([read.smooth_values(), read.centerlines[0].ravel()])
+
+    def central(j: int, step: float) -> np.ndarray:
+        e = np.zeros(len(names))
+        e[j] = step
+        return (readings(e) - readings(-e)) / (2.0 * step)
+
+    worst = 0.0
+    for j in varied:
+        reference = (4.0 * central(j, steps[j] / 2.0) - central(j, steps[j])) / 3.0
+        quantities, stations = reference[:3], reference[3:]
+        scale = np.abs(quantities) + np.abs(sensitivities.values) / (step_sizes(problem)[j] / 1e-7)
+        worst = max(worst, float(np.max(np.abs(sensitivities.derivatives[:, j] - quantities) / scale)))
+        station_error = np.max(np.abs(sensitivities.station_derivatives[:, :, j].ravel() - stations))
+        worst = max(worst, float(station_error / np.max(np.abs(stations))))
+    assert worst <= 1e-6  # the issue asks 1e-5; measured at most 2e-7 (the stations' derivatives along EI)
+
+
+@pytest.mark.parametrize("kind", ["fixed", "rotating", "ball"])
+def test_the_warm_start_with_a_clip_reaches_the_published_placement(kind):
+    """Newton from the nominal equilibria (start = "nominal") against the published sequence from the straight hose,
+    for mounts, length and clip moved (measured: within 1e-8 mm)."""
+    from hoseline.procedures.placement.sequence import place_only
+    from hoseline.procedures.variation.nominal import nominal_placement, warm_start
+    from hoseline.procedures.variation.samples import placement_readings
+
+    problem = clipped(kind)
+    nominal = nominal_placement(problem)
+    names = coordinate_names(1)
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        deviation = np.zeros(len(names))
+        deviation[[5, 6, 7, 15, 16, 17]] = rng.normal(0.0, 0.5, 6)  # end.x .. z and clips[0].x .. z, mm
+        deviation[names.index("hose.length")] = rng.normal(0.0, 1.0)
+        if kind != "ball":
+            deviation[18:20] = rng.normal(0.0, 1.0, 2)  # the clip's direction, degrees
+        warm = placement_readings(*warm_start(nominal, deviation)).centerlines[0]
+        hose = perturbed(problem, deviation)
+        published = placement_readings(hose, *place_only(hose)[:3]).centerlines[0]
+        assert np.max(np.linalg.norm(warm - published, axis=1)) < 1e-6

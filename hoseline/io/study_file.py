@@ -170,9 +170,10 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
     base, text = _base(base_path, str(path), spec.base)
     variation = Variation(tuple(_tolerance(item, k, base, str(path)) for k, item in enumerate(spec.vary)),
                           clips=len(base.problem.clips))
-    if base.problem.clips and spec.sampling.start == "nominal":
-        raise StudyFileError(f"{path}: sampling.start = \"nominal\" with clips in the base: the warm start from the "
-                             "nominal hose does not carry clips yet; use start = \"straight\" (the published placement)")
+    if any(clip.kind == "sliding" for clip in base.problem.clips) and spec.sampling.start == "nominal":
+        raise StudyFileError(f"{path}: sampling.start = \"nominal\" with a sliding clip in the base: the warm start "
+                             "from the nominal hose does not carry sliding clips (the placement moves one to the "
+                             "nearest station at its end); use start = \"straight\" (the published placement)")
     limits = _limits(spec.limits, base, str(path))
     sampling = Sampling(spec.sampling.method, spec.sampling.samples if spec.vary else 0, spec.sampling.seed,
                         spec.sampling.batch, spec.sampling.start)

@@ -17,13 +17,13 @@ published sequence from the straight hose; samples.py checks it on a subset.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from hoseline.mechanics.newton import RodProperties, end_frame_of, evaluate, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, RodState
-from hoseline.mechanics.rotations import frame_from_tangent, rotation_matrix
+from hoseline.mechanics.rotations import frame_from_tangent, rotation_matrix, rotation_vector
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.sequence import PlacementPath, place_only, rod_properties
 from hoseline.procedures.variation.tolerances import COORDINATES, INDEX, perturbed, tilt_axes
@@ -46,10 +46,18 @@ class PerturbedPlacement:
         """The clamps at the end of the place phase, end fitting free to roll."""
         return self.path.place(1.0)
 
-    def final(self, roll: float) -> Clamps:
-        """The final clamps with the end fitting locked at `roll` (rad, from the free clamps' frame) and twisted."""
-        locked = end_frame_of(self.free(), RodState(np.empty((0, 3, 3)), np.zeros(3), roll))
-        return self.path.twisted(locked, self.problem.end_twist_deg)
+    def final(self, rolled: RodState) -> Clamps:
+        """The final clamps with the end fitting locked at the roll of `rolled` (rad, from the free clamps' frame)
+        and twisted, each fixed clip locked at its clip roll there (rotating and ball clips stay as they are)."""
+        locked = end_frame_of(self.free(), rolled)
+        clips, _ = self.path.locked_clips(rolled)
+        return self.path.twisted(locked, self.problem.end_twist_deg, clips)
+
+
+def rolled(roll: float, clip_rolls: np.ndarray) -> RodState:
+    """A state that carries only rolls (rad): the end roll and the clip rolls, for PerturbedPlacement.final."""
+    count = len(clip_rolls)
+    return RodState(np.empty((0, 3, 3)), np.zeros(3), float(roll), np.zeros((count, 3)), np.asarray(clip_rolls, float))
 
 
 @dataclass(frozen=True)
@@ -72,19 +80,36 @@ def nominal_placement(problem: Problem) -> NominalPlacement:
     """
     if problem.hose.stiffeners is not None:
         raise ValueError("the stiffener springs are not covered (they are phased in after the lock)")
-    if problem.clips:
-        raise ValueError("the clips are not covered (the nominal equilibria carried here hold the two fittings only)")
+    if any(clip.kind == "sliding" for clip in problem.clips):
+        raise ValueError("sliding clips are not covered (the placement moves a sliding clip to the nearest station "
+                         "at its end, a step in the parameters)")
     props, final, state, lock_angle_deg = place_only(problem)
-    if problem.end_twist_deg == 0.0:
-        placed = state
-    else:
-        _, _, placed, _ = place_only(Problem(problem.hose, problem.start, problem.end, 0.0, problem.gravity, problem.name))
-    free_state = RodState(placed.frames, placed.end_force, math.radians(lock_angle_deg))
-    free = evaluate(props, PerturbedPlacement(problem, np.zeros(len(COORDINATES))).free(), free_state).residual
+    untwisted, placed = final, state
+    if problem.end_twist_deg != 0.0:
+        _, untwisted, placed, _ = place_only(replace(problem, end_twist_deg=0.0))
+    free_clamps = PerturbedPlacement(problem, np.zeros(len(COORDINATES))).free()
+    free_state = RodState(placed.frames, placed.end_force, math.radians(lock_angle_deg), placed.clip_forces,
+                          _free_clip_rolls(free_clamps, untwisted, placed), placed.clip_arc_lengths)
+    free = evaluate(props, free_clamps, free_state).residual
     residual = evaluate(props, final, state).residual
     if max(free, residual) > EQUILIBRIUM:
         raise ValueError(f"the nominal equilibria were not reconstructed (residuals {free:.2e}, {residual:.2e})")
     return NominalPlacement(problem, props, free_state, final, state)
+
+
+def _free_clip_rolls(free: Clamps, locked: Clamps, state: RodState) -> np.ndarray:
+    """The clip rolls (rad) of the roll-free equilibrium: a fixed clip's is the angle its locked frame (in
+    `locked`, the untwisted final clamps) is turned from its roll-free frame (in `free`) about the clip's axis; a
+    rotating clip's stays free in `state`; a ball clip has none (0)."""
+    rolls = np.zeros(len(free.clips))
+    for j, (loose, held) in enumerate(zip(free.clips, locked.clips)):
+        if loose.frame is None:
+            continue
+        if held.roll_free:
+            rolls[j] = state.clip_rolls[j]
+        else:  # held.frame = loose.frame @ R(roll d3)^T, so held.frame^T @ loose.frame = R(roll d3)
+            rolls[j] = float(rotation_vector(held.frame.T @ loose.frame) @ loose.frame[2])
+    return rolls
 
 
 WARM_SCHEDULES = ((1.0,), (0.5, 1.0), (0.25, 0.5, 0.75, 1.0))  # fractions of the deviation, tried in turn
@@ -101,7 +126,7 @@ def warm_start(nominal: NominalPlacement, deviation: np.ndarray) -> tuple[Proble
             free, report = solve_equilibrium(side.props, side.free(), free)
             if not (report.converged and report.unstable_directions == 0):
                 break
-            clamps = side.final(free.roll)
+            clamps = side.final(free)
             state, report = solve_equilibrium(side.props, clamps, state)
             if not (report.converged and report.unstable_directions == 0):
                 break

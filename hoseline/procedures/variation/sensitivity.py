@@ -31,23 +31,27 @@ from dataclasses import dataclass
 import numpy as np
 
 from hoseline.mechanics.banded import kkt_solve, ldlt_banded
+from hoseline.mechanics.bordered import kkt_solve_bordered
+from hoseline.mechanics.clipped import unknown_layout
 from hoseline.mechanics.newton import apply_step, evaluate
+from hoseline.mechanics.rod import Clamps
 from hoseline.model.problem import Problem
-from hoseline.procedures.variation.nominal import PerturbedPlacement, nominal_placement
+from hoseline.procedures.variation.nominal import PerturbedPlacement, nominal_placement, rolled
 from hoseline.procedures.variation.quantities import quantities
 from hoseline.procedures.variation.samples import placement_readings
-from hoseline.procedures.variation.tolerances import COORDINATE_UNITS, COORDINATES, Variation
+from hoseline.procedures.variation.tolerances import COORDINATES, Variation, coordinate_units
 
 RELATIVE_STEP = 1e-7  # central-difference step, of the parameter's scale (mm: the hose length; deg: 100 deg; ln: 10)
 
 
 @dataclass
 class Sensitivities:
-    """Derivatives at the nominal hose, per unit of each canonical coordinate (tolerances.COORDINATES).
+    """Derivatives at the nominal hose, per unit of each canonical coordinate (tolerances.coordinate_names).
 
     names: the quantities differentiated (quantities() without the deviation).  values: (q,) at
-    the nominal hose.  derivatives: (q, 15).  stations: (N+1, 3) mm, the nominal centreline;
-    station_derivatives: (N+1, 3, 15) mm per unit.  Columns of coordinates no tolerance moves are zero.
+    the nominal hose.  derivatives: (q, width), width = 15 + 5 per clip (Variation.width).  stations: (N+1, 3)
+    mm, the nominal centreline; station_derivatives: (N+1, 3, width) mm per unit.  Columns of coordinates no
+    tolerance moves are zero.
     kinks: notes on quantities whose derivative is one-sided (a sweep's extreme reached at two poses).
     """
 
@@ -81,15 +85,17 @@ class Sensitivities:
 
 
 def step_sizes(problem: Problem) -> np.ndarray:
-    """(15,) central-difference steps of the coordinates, user units."""
+    """(width,) central-difference steps of the coordinates (15 and five per clip), user units."""
     scale = {"mm": problem.hose.length, "deg": 100.0, "ln": 10.0}
-    return np.array([RELATIVE_STEP * scale[unit] for unit in COORDINATE_UNITS])
+    return np.array([RELATIVE_STEP * scale[unit] for unit in coordinate_units(len(problem.clips))])
 
 
 def _tangent(system, dgrad: np.ndarray, dconstraint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(dx/dp, dmu/dp) from the bordered system of `system` (exact Hessian) and the parameter derivatives."""
+    """(dx/dp, dmu/dp) from the bordered system of `system` (exact Hessian) and the parameter derivatives
+    (three border rows for the end; three more per clip)."""
     lower, diag, _ = ldlt_banded(system.band, 0.0)
-    step, mu, _ = kkt_solve(lower, diag, system.jac_t, dgrad, dconstraint)
+    solve = kkt_solve if system.jac_t.shape[1] == 3 else kkt_solve_bordered
+    step, mu, _ = solve(lower, diag, system.jac_t, dgrad, dconstraint)
     return step, mu
 
 
@@ -101,15 +107,16 @@ def placement_sensitivities(problem: Problem, varied: tuple[int, ...]) -> Sensit
     """
     nominal = nominal_placement(problem)
     props, final, state, free_state = nominal.props, nominal.final, nominal.state, nominal.free_state
-    free_system = evaluate(props, PerturbedPlacement(problem, np.zeros(len(COORDINATES))).free(), free_state)
+    free_clamps = PerturbedPlacement(problem, np.zeros(len(COORDINATES))).free()
+    free_system = evaluate(props, free_clamps, free_state)
     final_system = evaluate(props, final, state)
     readings = placement_readings(problem, props, final, state)
     values = readings.smooth_values()
-    derivatives = np.zeros((values.size, len(COORDINATES)))
-    station_derivatives = np.zeros(readings.centerlines[0].shape + (len(COORDINATES),))
     steps = step_sizes(problem)
+    derivatives = np.zeros((values.size, steps.size))
+    station_derivatives = np.zeros(readings.centerlines[0].shape + (steps.size,))
     for j in varied:
-        sides, finals = perturbed_finals(problem, free_system, free_state, j, steps[j])
+        sides, finals = perturbed_finals(problem, free_clamps, free_system, free_state, j, steps[j])
         moved = [evaluate(side.props, clamps, state) for side, clamps in zip(sides, finals)]
         dx, dmu = _tangent(final_system, (moved[0].grad - moved[1].grad) / (2 * steps[j]),
                            (moved[0].constraint - moved[1].constraint) / (2 * steps[j]))
@@ -129,20 +136,32 @@ def placement_sensitivities(problem: Problem, varied: tuple[int, ...]) -> Sensit
     )
 
 
-def perturbed_finals(problem: Problem, free_system, free_state, j: int, step: float):
-    """The hoses at coordinate j +- step (user units) and their final placement clamps, the lock angle moved
-    to first order: ((side +, side -), (clamps +, clamps -)).  free_system: the nominal roll-free equilibrium's
-    system (evaluate), free_state its state."""
-    eps = step * np.eye(len(COORDINATES))[j]
+def perturbed_finals(problem: Problem, free_clamps: Clamps, free_system, free_state, j: int, step: float):
+    """The hoses at coordinate j +- step (user units) and their final placement clamps, the lock angles (of the
+    end fitting and of fixed clips) moved to first order: ((side +, side -), (clamps +, clamps -)).
+    free_clamps, free_system: the nominal roll-free equilibrium's clamps and system (evaluate), free_state
+    its state."""
+    eps = step * np.eye(step_sizes(problem).size)[j]
     sides = (PerturbedPlacement(problem, eps), PerturbedPlacement(problem, -eps))
     free = [evaluate(side.props, side.free(), free_state) for side in sides]
-    _, roll_step = _roll_tangent(free_system, free, step)
-    rolls = (free_state.roll + step * roll_step, free_state.roll - step * roll_step)
+    roll_step, clip_roll_step = _roll_tangent(free_clamps, len(free_state.frames), free_system, free, step)
+    rolls = [rolled(free_state.roll + sign * step * roll_step, _clip_rolls(free_state) + sign * step * clip_roll_step)
+             for sign in (1.0, -1.0)]
     return sides, [side.final(r) for side, r in zip(sides, rolls)]
 
 
-def _roll_tangent(free_system, sides, step: float) -> tuple[np.ndarray, float]:
-    """(dx/dp, droll/dp) of the roll-free equilibrium from the systems at p +- step."""
+def _clip_rolls(state) -> np.ndarray:
+    return state.clip_rolls if state.clip_rolls.size else np.zeros(0)
+
+
+def _roll_tangent(free_clamps: Clamps, segments: int, free_system, sides, step: float) -> tuple[float, np.ndarray]:
+    """(droll/dp, dclip_rolls/dp) of the roll-free equilibrium (rad per unit) from the systems at p +- step: the
+    end roll's and the clips' roll unknowns of its tangent (zero for a clip without one)."""
     dx, _ = _tangent(free_system, (sides[0].grad - sides[1].grad) / (2 * step),
                      (sides[0].constraint - sides[1].constraint) / (2 * step))
-    return dx, float(dx[-1])
+    if not free_clamps.clips:
+        return float(dx[-1]), np.zeros(0)
+    nodes = np.array([hold.node for hold in free_clamps.clips], dtype=np.int64)
+    roll_free = np.array([hold.roll_free for hold in free_clamps.clips])
+    _, clip_roll_index, end_roll_index, _ = unknown_layout(segments, nodes, roll_free, True)
+    return float(dx[end_roll_index]), np.where(clip_roll_index >= 0, dx[np.maximum(clip_roll_index, 0)], 0.0)

@@ -144,13 +144,14 @@ def sweep_sensitivities(sweep: SweepProblem, varied: tuple[int, ...]) -> Sensiti
             raise ValueError(f"pose {k} of the sweep is not an equilibrium under the placement's clamps carried to it "
                              f"(residual {system.residual:.2e}): the sweep's assembly differs from the placement")
         systems[k] = system
-    free_system = evaluate(props, PerturbedPlacement(problem, np.zeros(len(COORDINATES))).free(), nominal.free_state)
+    free_clamps = PerturbedPlacement(problem, np.zeros(len(COORDINATES))).free()
+    free_system = evaluate(props, free_clamps, nominal.free_state)
     derivatives = np.zeros((values.size, len(COORDINATES)))
     station_derivatives = np.zeros(whole.centerlines[0].shape + (len(COORDINATES),))
     steps = step_sizes(problem)
     for j in varied:
         h = steps[j]
-        sides, finals = perturbed_finals(problem, free_system, nominal.free_state, j, h)
+        sides, finals = perturbed_finals(problem, free_clamps, free_system, nominal.free_state, j, h)
         for k in needed:
             state = equilibria[k][1]
             clamps = [pose_clamps(sweep, k, final) for final in finals]

@@ -324,13 +324,17 @@ def _turned(direction: np.ndarray, tilt_deg: np.ndarray) -> np.ndarray:
     return direction
 
 
-def _moved_clips(clips: tuple[Clip, ...], deviation: np.ndarray) -> tuple[Clip, ...]:
-    """The clips moved by their coordinates in `deviation` (five per clip after COORDINATES; none: unmoved)."""
+def _moved_clips(clips: tuple[Clip, ...], deviation: np.ndarray, stretch: float) -> tuple[Clip, ...]:
+    """The clips moved by their coordinates in `deviation` (five per clip after COORDINATES; none: unmoved), their
+    arc lengths times `stretch` (the hose's length over the nominal: a longer hose is longer all along, so each clip
+    holds the same station)."""
     moved = []
     for k, clip in enumerate(clips):
+        clip = replace(clip, arc_length=clip.arc_length * stretch)
         first = len(COORDINATES) + len(CLIP_COORDINATES) * k
         if deviation.size <= first:
-            return tuple(moved) + clips[k:]
+            moved.append(clip)
+            continue
         offset, tilt = deviation[first:first + 3], deviation[first + 3:first + 5]
         if clip.direction is None and np.any(tilt != 0.0):
             raise ValueError(f"clips[{k}].direction: a ball clip holds no direction to vary")
@@ -362,5 +366,5 @@ def perturbed(problem: Problem, deviation: np.ndarray) -> Problem:
         start=_tilted(problem.start, c[0:3], c[3:5]),
         end=_tilted(problem.end, c[5:8], c[8:10]),
         end_twist_deg=problem.end_twist_deg + c[INDEX["end.twist"]],
-        clips=_moved_clips(problem.clips, c),
+        clips=_moved_clips(problem.clips, c, hose.length / problem.hose.length),
     )
