@@ -1,6 +1,7 @@
 """Problem files: valid ones load and round trip; invalid ones fail with a message naming field, value and fix."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -161,6 +162,15 @@ def test_a_torsional_stiffness_computed_above_the_range_asks_for_a_smaller_facto
     """Found by the fuzz campaign: EI = 1e11 N*mm^2 with factor 15 gives GJ a rounding over 1e12 N*mm^2; the fix named
     is a smaller factor, not a larger one."""
     del thesis_dict["hose"]["torsional_stiffness"]
-    thesis_dict["hose"].update(bending_stiffness=1e11, torsion_factor=15.000000000000004)
+    thesis_dict["hose"].update(bending_stiffness=1e11, torsion_factor=15.000000000000004, outer_diameter=80.0)
     with pytest.raises(ProblemFileError, match=r"gives GJ = 1e\+12 N\*mm\^2, outside .*give a smaller torsion_factor"):
+        problem_from_dict(thesis_dict)
+
+
+@pytest.mark.parametrize("bending, diameter, modulus", [(1e11, 10.1, "1.96e+08"), (1e-3, 80.0, "4.97e-10")])
+def test_a_bending_stiffness_no_material_of_that_diameter_has_is_refused(thesis_dict, bending, diameter, modulus):
+    """EI and the diameter are each in range, but a solid rod of that diameter would need a Young's modulus beyond
+    tungsten, or below a lay-flat fire hose: a unit mistake (the fuzz campaign's hoses that could not be placed)."""
+    thesis_dict["hose"].update(bending_stiffness=bending, outer_diameter=diameter)
+    with pytest.raises(ProblemFileError, match=rf"needs a solid rod of Young.s modulus {re.escape(modulus)} N/mm\^2 .*check the units"):
         problem_from_dict(thesis_dict)

@@ -411,6 +411,16 @@ class HoseSection(_Section):
     def _stiffnesses_in_range(self) -> None:
         """Refuse an EI computed from youngs_modulus outside the stiffness range, and lopsided stiffness ratios."""
         bending, torsional = self.stiffnesses()
+        if self.bending_stiffness is not None:
+            modulus = bending / (math.pi * self.outer_diameter**4 / 64.0)
+            low, high = limits.EFFECTIVE_MODULUS_NMM2
+            if not limits.within(modulus, limits.EFFECTIVE_MODULUS_NMM2):
+                raise ValueError(
+                    f"hose.bending_stiffness = {_show(self.bending_stiffness)} N*mm^2 with outer_diameter = "
+                    f"{_show(self.outer_diameter)} mm needs a solid rod of Young's modulus {modulus:.3g} N/mm^2 "
+                    f"(EI / (pi d^4 / 64)), outside {low:g}-{high:g} N/mm^2 (a lay-flat fire hose to tungsten): check "
+                    "the units (EI in N*mm^2: 1 N*m^2 = 1e6 N*mm^2; the diameter in mm)"
+                )
         low, high = limits.STIFFNESS_NMM2
         if not limits.within(bending, limits.STIFFNESS_NMM2):
             raise ValueError(

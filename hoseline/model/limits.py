@@ -30,6 +30,11 @@ STIFFNESS_NMM2 = (1e-3, 1e12)
 # Young's modulus: soft gels (1e-3 N/mm^2 = 1 kPa) to tungsten (4e5 N/mm^2)
 YOUNGS_MODULUS_NMM2 = (1e-3, 1e6)
 
+# EI over the solid section of the outer diameter, pi d^4 / 64: the Young's modulus a solid rod of that
+# diameter would need.  Nothing at hose scale is stiffer than tungsten (4e5 N/mm^2); a lay-flat textile
+# fire hose, the limpest hose, is about 3e-5 N/mm^2 (EI 10 N*mm^2 at 50 mm).  Outside: a unit mistake
+EFFECTIVE_MODULUS_NMM2 = (1e-6, 1e6)
+
 # GJ over the isotropic EI/(1 + nu), and EI2 over EI: catalogue hoses lie within 0.1-100 (the thesis'
 # brake hose 25); beyond 1e-3-1e3 the section is a ribbon or a shaft, not a hose
 STIFFNESS_RATIO = (1e-3, 1e3)
