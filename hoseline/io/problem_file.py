@@ -379,6 +379,12 @@ def _braid_angle(value: float) -> float:
     return value
 
 
+def _braid_slack(value: float) -> float:
+    if not (math.isfinite(value) and 0.0 <= value <= limits.BRAID_SLACK_STRAIN):
+        raise ValueError(f"must lie in [0, {limits.BRAID_SLACK_STRAIN:g}]: a strain as a fraction (0.005 for 0.5 %)")
+    return value
+
+
 class BraidSection(_Section):
     """[hose.braid]: two families of tension-only strands at +-angle_deg to the hose axis (model/braid.py; mm, N, degrees)."""
 
@@ -386,7 +392,7 @@ class BraidSection(_Section):
     strands: Annotated[int, AfterValidator(_braid_strands)]
     strand_axial_stiffness: Annotated[float, _in_range(limits.BRAID_STRAND_STIFFNESS_N, "N",
                                                        "a fine yarn to a 10 mm steel rope")]
-    slack_strain: Annotated[float, _not_negative("a fraction: 0.005 for 0.5 %", limits.BRAID_SLACK_STRAIN)] = 0.0
+    slack_strain: Annotated[float, AfterValidator(_braid_slack)] = 0.0
     radius: Annotated[float, _in_range(limits.OUTER_DIAMETER_MM, "mm", "of the braid layer")] | None = None
 
 
