@@ -46,12 +46,6 @@ def braid_coefficients(strands: int, strand_axial_stiffness: float, angle_deg: f
     ])
 
 
-def linear_stiffnesses(braid: np.ndarray) -> tuple[float, float]:
-    """(Delta EI, Delta GJ) N*mm^2 of both families taut all round: n EA_s r^2 cos^3(beta), 2 n EA_s r^2 sin^2(beta) cos(beta)."""
-    coefficient, bend_arm, twist_arm, _ = braid
-    return 2.0 * coefficient * bend_arm**2, 4.0 * coefficient * twist_arm**2
-
-
 @njit(cache=True)
 def family_terms(a, b):
     """I(a, b) of one strand family (module doc) and what the chain rule to the Darboux vector needs.

@@ -25,7 +25,6 @@ import numpy as np
 from numba import njit
 
 from hoseline.mechanics.banded import banded_matvec, count_negative, kkt_solve, ldlt_banded, ldlt_solve
-from hoseline.mechanics.braid import linear_stiffnesses
 from hoseline.mechanics.energy import BANDWIDTH, assemble
 from hoseline.mechanics.rod import Clamps, RodState, centerline, constraint_jacobian_t, segment_loads
 from hoseline.mechanics.rotations import rotate_frames, rotation_matrix
@@ -56,9 +55,7 @@ class RodProperties:
 
     @property
     def largest_stiffness(self) -> float:
-        """The largest stiffness of the rod, N*mm^2 (the braid's taut-all-round stiffnesses included): the moment scale."""
-        braided = linear_stiffnesses(self.braid) if self.braid is not None else ()
-        return float(max(*self.stiffness, *braided))
+        return float(max(self.stiffness))
 
 
 @dataclass
