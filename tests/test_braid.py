@@ -1,0 +1,223 @@
+"""The braid coupling (mechanics/braid.py, model/braid.py): its closed form against quadrature, exact
+derivatives against finite differences in every regime of the strands, hand-derived torque and bending
+stiffness of a twisted hose, the exact limits (always slack: the plain hose; no slack: a linear stiffness),
+and the thesis hose's twist path with a braid."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from test_energy_derivatives import dense, finite_differences, random_frames
+
+from hoseline.demos.thesis_hose import demo_problem
+from hoseline.mechanics.braid import braid_coefficients, family_terms
+from hoseline.mechanics.energy import BANDWIDTH, assemble, elastic_energy, joint_energy, joint_moments
+from hoseline.mechanics.rotations import rotation_matrix
+from hoseline.model.braid import Braid
+from hoseline.model.preset import rest_rotations
+from hoseline.procedures.placement.sequence import solve
+from hoseline.procedures.placement.twist_path import follow_twist
+
+# a small rod for the derivative checks: 3 strands per family of EA 2 N at 35 degrees on radius 0.5 mm
+STRANDS, STRAND_EA, ANGLE_DEG, RADIUS = 3, 2.0, 35.0, 0.5
+
+
+@pytest.mark.parametrize("a, b", [(1.0, 0.3), (1.0, -0.3), (1.0, 0.0), (0.5, 0.7), (0.5, -0.7), (0.0, 0.4)])
+def test_closed_form_matches_quadrature(a, b):
+    """I(a, b) = <(a cos theta + b)_+^2> and its b-derivatives against numerical integration round the section."""
+    def mean(f):
+        kinks = [math.acos(-b / a)] if a > abs(b) else []
+        return quad(f, 0.0, math.pi, points=kinks, epsabs=1e-13)[0] / math.pi
+
+    value, slope_b, curve_b, _, _, _ = family_terms(a, b)
+    assert value == pytest.approx(mean(lambda t: max(a * math.cos(t) + b, 0.0) ** 2), rel=1e-9, abs=1e-14)
+    assert slope_b == pytest.approx(mean(lambda t: 2.0 * max(a * math.cos(t) + b, 0.0)), rel=1e-9, abs=1e-14)
+    assert curve_b == pytest.approx(mean(lambda t: 2.0 * (a * math.cos(t) + b > 0.0)), rel=1e-9, abs=1e-14)
+
+
+def _lagrangian(frames, start, end, stiffness, h, loads, roll_free, rest, braid):
+    n = 3 * frames.shape[0] + (1 if roll_free else 0)
+    grad = np.empty(n)
+    band = np.empty((n, BANDWIDTH + 1))
+    e_el, e_seg = assemble(frames, start, end, stiffness, h, loads, roll_free, grad, band, True, None, rest, braid)
+    return e_el + e_seg, grad, band
+
+
+def _regimes(frames, start, end, h, braid, rest):
+    """Which regimes the strand families are in at the joints: 'slack', 'partly taut', 'taut'."""
+    _, darboux = joint_moments(frames, start, end, np.ones(3), h, True, None, rest)
+    if rest is not None:  # the strands strain with the deviation from the stress-free joint rotation
+        turned = [r.T @ f for r, f in zip(rest, np.concatenate([start[None], frames]))]
+        _, darboux = zip(*[joint_moments(np.array([fb]), fa, fb, np.ones(3), h, False)
+                           for fa, fb in zip(turned, np.concatenate([frames, end[None]]))])
+        darboux = np.array([d[0] for d in darboux])
+    coefficient, bend_arm, twist_arm, slack = braid
+    found = set()
+    for k0, k1, k2 in darboux:
+        a = bend_arm * math.hypot(k0, k1)
+        for sign in (1.0, -1.0):
+            b = sign * twist_arm * k2 - slack
+            found.add("slack" if b <= -a else "taut" if b >= a else "partly taut")
+    return found
+
+
+def _twisted_frames(angles):
+    return np.array([rotation_matrix(np.array([0.0, 0.0, angle])).T for angle in angles])
+
+
+def _random_rod(rng, spread):
+    """Six segment frames and the two fitting frames of a randomly bent and twisted rod (`spread` rad per joint)."""
+    frames = random_frames(rng, 8, spread)
+    return frames[1:-1], frames[0], frames[-1]
+
+
+CASES = {
+    # name: (frames, start, end; slack strain; with a preset; the regimes of the strand families at the joints)
+    "bent and twisted": (lambda rng: _random_rod(rng, 0.4), 0.05, False, {"slack", "partly taut", "taut"}),
+    "pure twist, no bending": (lambda rng: (_twisted_frames(np.cumsum(rng.uniform(0.1, 0.5, 6))), np.eye(3),
+                                            _twisted_frames([2.5])[0]), 0.01, False, {"slack", "taut"}),
+    "little bending, more twist": (lambda rng: (random_frames(rng, 6, 0.15) @ _twisted_frames(0.3 * np.arange(1, 7)),
+                                                np.eye(3), _twisted_frames([2.1])[0]), 0.02,
+                                   False, {"slack", "taut", "partly taut"}),
+    "always slack": (lambda rng: _random_rod(rng, 0.4), 0.9, False, {"slack"}),
+    "near straight, no slack": (lambda rng: _random_rod(rng, 1e-4), 0.0, False, {"partly taut"}),
+    "with a preset": (lambda rng: _random_rod(rng, 0.4), 0.02, True, {"slack", "partly taut", "taut"}),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+@pytest.mark.parametrize("roll_free", [False, True])
+def test_gradient_and_hessian_with_braid_match_finite_differences(name, roll_free):
+    build, slack, with_preset, expected = CASES[name]
+    rng = np.random.default_rng(5)
+    frames, start, end = build(rng)
+    h = 0.8
+    stiffness = np.array([1.0, 1.3, 0.7])
+    loads = rng.normal(size=(frames.shape[0], 3))
+    rest = rest_rotations(rng.normal(scale=0.3, size=(frames.shape[0] + 1, 3)), h) if with_preset else None
+    braid = braid_coefficients(STRANDS, STRAND_EA, ANGLE_DEG, RADIUS, slack)
+    assert _regimes(frames, start, end, h, braid, rest) == expected  # the case exercises what it says
+    energy, grad, band = _lagrangian(frames, start, end, stiffness, h, loads, roll_free, rest, braid)
+    fd_grad, fd_hess = finite_differences(
+        lambda f, e: _lagrangian(f, start, e, stiffness, h, loads, roll_free, rest, braid)[:2], frames, end, grad.size,
+        roll_free, 1e-6,
+    )
+    # measured: gradient within 4e-10, Hessian within 2e-9 of the largest entry (central differences, step 1e-6)
+    assert np.max(np.abs(grad - fd_grad)) < 1e-8 * np.max(np.abs(grad))
+    hess = dense(band)
+    assert np.max(np.abs(hess - 0.5 * (fd_hess + fd_hess.T))) < 2e-8 * np.max(np.abs(hess))
+    e_seg = -np.sum(loads * frames[:, 2])
+    elastic = elastic_energy(frames, start, end, stiffness, h, True, None, rest, braid)
+    assert elastic == pytest.approx(energy - e_seg, rel=1e-12)
+    braid_energy = elastic - elastic_energy(frames, start, end, stiffness, h, True, None, rest, None)
+    if expected == {"slack"}:
+        assert braid_energy == 0.0
+    else:
+        assert braid_energy > 1e-3 * elastic  # the braid adds energy: the check sees it
+
+
+def _joint_with_darboux(kappa, length):
+    """Frames (A, B) of a joint whose discrete Darboux vector is kappa (1/mm): Q = A B^T turns by 2 atan(l |kappa| / 2)."""
+    angle = 2.0 * math.atan(0.5 * length * np.linalg.norm(kappa))
+    axis = kappa / np.linalg.norm(kappa)
+    return np.eye(3), rotation_matrix(angle * axis)  # Q = rotation_matrix^T: its axial vector runs along -axis
+
+
+@pytest.mark.parametrize("twist_rate, slack, taut", [(0.006, 0.003, True), (0.001, 0.003, False), (-0.006, 0.003, True)])
+def test_small_bending_stiffness_of_a_twisted_joint(twist_rate, slack, taut):
+    """Twisted beyond the slack, a joint bends with EI + n EA_s r^2 cos^3(beta) / 2 (the stretched family taut all
+    round, the other slack); twisted less, with EI alone.  Hand formula of docs/model.md; either sense of twist."""
+    strands, strand_ea, angle, radius = 10, 400.0, 40.0, 4.0
+    beta = math.radians(angle)
+    bending, torsion, length = 1.5e5, 1.0e5, 3.0
+    braid = braid_coefficients(strands, strand_ea, angle, radius, slack)
+    stiffness = np.array([bending, bending, torsion])
+
+    def energy(bend):
+        a, b = _joint_with_darboux(np.array([bend, 0.0, twist_rate]), length)
+        return joint_energy(a, b, stiffness, length, braid)
+
+    bend = 1e-6  # the taut family stays taut all round: radius cos^2(beta) bend < radius sin cos twist - slack
+    measured = 2.0 * (energy(bend) - energy(0.0)) / (length * bend**2)
+    added = 0.5 * strands * strand_ea * radius**2 * math.cos(beta) ** 3 if taut else 0.0
+    assert measured == pytest.approx(bending + added, rel=1e-6)  # measured: 3e-8 (rounding of the difference)
+    assert (added > 0.0) == (radius * math.sin(beta) * math.cos(beta) * abs(twist_rate) > slack)
+
+
+@pytest.mark.parametrize("twist_deg", [120.0, -120.0, 30.0])
+def test_straight_twisted_hose_carries_the_hand_torque(twist_deg):
+    """A straight hose twisted uniformly by theta carries GJ tau + n EA_s r sin(beta) (r sin cos tau - eps0)_+ at
+    tau = theta / L: the stretched family's tension times its lever arm round the axis (docs/model.md).  The straight
+    twisted rod is an equilibrium by symmetry; its joint moments come from the kernel."""
+    strands, strand_ea, angle, radius, slack = 10, 400.0, 40.0, 4.0, 0.005
+    beta = math.radians(angle)
+    length, segments, torsion = 300.0, 100, 1.0e5
+    h = length / segments
+    twist = math.radians(twist_deg)
+    stiffness = np.array([1.5e5, 1.5e5, torsion])
+    braid = braid_coefficients(strands, strand_ea, angle, radius, slack)
+    frames = _twisted_frames(twist * (np.arange(segments) + 0.5) / segments)
+    moments, _ = joint_moments(frames, np.eye(3), _twisted_frames([twist])[0], stiffness, h, True, None, None, braid)
+    tau = twist / length
+    strain = radius * math.sin(beta) * math.cos(beta) * abs(tau) - slack
+    hand = torsion * tau + math.copysign(strands * strand_ea * radius * math.sin(beta) * max(strain, 0.0), tau)
+    assert (strain > 0.0) == (abs(twist_deg) > 100.0)  # 120 degrees: the stretched family is taut, 30: slack
+    assert np.allclose(moments[:, :2], 0.0, atol=1e-9 * abs(hand))
+    # measured: 1.1e-4 relative, the moment dE/dpsi = W'(kappa) (1 + tan^2(psi / 2)) of a joint turned by psi = theta / N
+    assert np.allclose(moments[:, 2], hand, rtol=3e-4)
+    plain, _ = joint_moments(frames, np.eye(3), _twisted_frames([twist])[0], stiffness, h, True)
+    assert np.all(np.abs(moments[:, 2] - plain[:, 2]) > 0.1 * abs(hand)) == (strain > 0.0)
+
+
+def _braided(problem, braid):
+    return replace(problem, hose=replace(problem.hose, braid=braid))
+
+
+def test_an_always_slack_braid_places_exactly_as_the_plain_hose():
+    """With a slack strain no strand reaches (1: the thesis hose strains its strands by at most 5 %), the placement
+    at 180 degrees is the plain one bit for bit."""
+    problem = demo_problem(180.0, 40)
+    plain = solve(problem)
+    braided = solve(_braided(problem, Braid(38.0, 12, 1500.0, 1.0, 3.7)))
+    assert np.array_equal(braided.centerline, plain.centerline)
+    assert np.array_equal(braided.twisting_moment, plain.twisting_moment)
+
+
+def test_a_braid_without_slack_is_a_linear_stiffness():
+    """With eps0 = 0 the two families together store exactly C (alpha^2 kappa_b^2 + 2 gamma^2 tau^2) / 2 (what one
+    family's tension-only strain leaves, the other takes up): the hose with EI + n EA_s r^2 cos^3(beta) / 2 and
+    GJ + n EA_s r^2 sin^2(beta) cos(beta), at every twist."""
+    problem = demo_problem(180.0, 40)
+    strands, strand_ea, angle, radius = 12, 1500.0, 38.0, 3.7
+    beta = math.radians(angle)
+    braided = solve(_braided(problem, Braid(angle, strands, strand_ea, 0.0, radius)))
+    stiffness = strands * strand_ea * radius**2
+    hose = replace(problem.hose, bending_stiffness=problem.hose.bending_stiffness + 0.5 * stiffness * math.cos(beta) ** 3,
+                   torsional_stiffness=problem.hose.torsional_stiffness
+                   + stiffness * math.sin(beta) ** 2 * math.cos(beta))
+    linear = solve(replace(problem, hose=hose))
+    distance = np.max(np.linalg.norm(braided.centerline - linear.centerline, axis=1))
+    moved = np.max(np.linalg.norm(linear.centerline - solve(problem).centerline, axis=1))
+    assert moved > 1.0  # the braid matters at this stiffness (measured: 3.5 mm)
+    assert distance < 1e-6  # measured: 3e-10 mm (the solver's tolerance)
+
+
+def test_thesis_twist_path_with_a_braid_is_smooth_and_stiffer_in_torsion():
+    """The thesis hose twisted 0 -> 180 degrees in 5 degree steps with a braid: no jump, no failure; the braid moves
+    the 180 degree shape by millimetres and the 0 degree shape less (its strands are strained by bending alone there),
+    and at 180 degrees the strands carry part of the twisting moment: more torque per twist rate than GJ."""
+    problem = demo_problem(0.0, 40)
+    braid = Braid(38.0, 12, 1500.0, 0.005, 3.7)
+    twists = np.arange(0.0, 181.0, 5.0)
+    plain = follow_twist(problem, twists, "plain")
+    braided = follow_twist(_braided(problem, braid), twists, "braid")
+    assert not braided.failure and not braided.jumps
+    # measured: largest step 4.55 mm, median 3.90 mm (plain: 4.79 and 3.96 mm)
+    assert np.max(braided.steps) < 1.5 * np.median(braided.steps)
+    moved_0, moved_180 = (np.max(np.linalg.norm(braided.centerlines[k] - plain.centerlines[k], axis=1)) for k in (0, -1))
+    assert moved_180 > 1.0 and moved_180 > 3.0 * moved_0  # measured: 3.67 mm and 0.41 mm
+    twisted = solve(_braided(demo_problem(180.0, 40), braid))
+    effective = twisted.twisting_moment / twisted.twist_rate
+    assert np.all(effective > problem.hose.torsional_stiffness)
