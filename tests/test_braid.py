@@ -104,10 +104,10 @@ def test_gradient_and_hessian_with_braid_match_finite_differences(name, roll_fre
         lambda f, e: _lagrangian(f, start, e, stiffness, h, loads, roll_free, rest, braid)[:2], frames, end, grad.size,
         roll_free, 1e-6,
     )
-    # measured: gradient within 4e-10, Hessian within 2e-9 of the largest entry (central differences, step 1e-6)
-    assert np.max(np.abs(grad - fd_grad)) < 1e-8 * np.max(np.abs(grad))
+    # measured: gradient within 3.1e-10, Hessian within 8.5e-11 of the largest entry (central differences, step 1e-6)
+    assert np.max(np.abs(grad - fd_grad)) < 1e-9 * np.max(np.abs(grad))
     hess = dense(band)
-    assert np.max(np.abs(hess - 0.5 * (fd_hess + fd_hess.T))) < 2e-8 * np.max(np.abs(hess))
+    assert np.max(np.abs(hess - 0.5 * (fd_hess + fd_hess.T))) < 3e-10 * np.max(np.abs(hess))
     e_seg = -np.sum(loads * frames[:, 2])
     elastic = elastic_energy(frames, start, end, stiffness, h, True, None, rest, braid)
     assert elastic == pytest.approx(energy - e_seg, rel=1e-12)
@@ -142,7 +142,7 @@ def test_small_bending_stiffness_of_a_twisted_joint(twist_rate, slack, taut):
     bend = 1e-6  # the taut family stays taut all round: radius cos^2(beta) bend < radius sin cos twist - slack
     measured = 2.0 * (energy(bend) - energy(0.0)) / (length * bend**2)
     added = 0.5 * strands * strand_ea * radius**2 * math.cos(beta) ** 3 if taut else 0.0
-    assert measured == pytest.approx(bending + added, rel=1e-6)  # measured: 3e-8 (rounding of the difference)
+    assert measured == pytest.approx(bending + added, rel=3e-8)  # measured: 1.0e-8 (rounding of the difference)
     assert (added > 0.0) == (radius * math.sin(beta) * math.cos(beta) * abs(twist_rate) > slack)
 
 
@@ -165,8 +165,8 @@ def test_straight_twisted_hose_carries_the_hand_torque(twist_deg):
     hand = torsion * tau + math.copysign(strands * strand_ea * radius * math.sin(beta) * max(strain, 0.0), tau)
     assert (strain > 0.0) == (abs(twist_deg) > 100.0)  # 120 degrees: the stretched family is taut, 30: slack
     assert np.allclose(moments[:, :2], 0.0, atol=1e-9 * abs(hand))
-    # measured: 1.1e-4 relative, the moment dE/dpsi = W'(kappa) (1 + tan^2(psi / 2)) of a joint turned by psi = theta / N
-    assert np.allclose(moments[:, 2], hand, rtol=3e-4)
+    # measured: 1.5e-4 relative, the moment dE/dpsi = W'(kappa) (1 + tan^2(psi / 2)) of a joint turned by psi = theta / N
+    assert np.allclose(moments[:, 2], hand, rtol=5e-4)
     plain, _ = joint_moments(frames, np.eye(3), _twisted_frames([twist])[0], stiffness, h, True)
     assert np.all(np.abs(moments[:, 2] - plain[:, 2]) > 0.1 * abs(hand)) == (strain > 0.0)
 
@@ -200,8 +200,8 @@ def test_a_braid_without_slack_is_a_linear_stiffness():
     linear = solve(replace(problem, hose=hose))
     distance = np.max(np.linalg.norm(braided.centerline - linear.centerline, axis=1))
     moved = np.max(np.linalg.norm(linear.centerline - solve(problem).centerline, axis=1))
-    assert moved > 1.0  # the braid matters at this stiffness (measured: 3.5 mm)
-    assert distance < 1e-6  # measured: 3e-10 mm (the solver's tolerance)
+    assert moved > 1.0  # the braid matters at this stiffness (measured: 3.39 mm)
+    assert distance < 1e-9  # measured: 9e-14 mm
 
 
 def test_thesis_twist_path_with_a_braid_is_smooth_and_stiffer_in_torsion():
@@ -214,10 +214,10 @@ def test_thesis_twist_path_with_a_braid_is_smooth_and_stiffer_in_torsion():
     plain = follow_twist(problem, twists, "plain")
     braided = follow_twist(_braided(problem, braid), twists, "braid")
     assert not braided.failure and not braided.jumps
-    # measured: largest step 4.55 mm, median 3.90 mm (plain: 4.79 and 3.96 mm)
+    # measured: largest step 4.57 mm, median 3.91 mm (plain: 4.79 and 3.96 mm)
     assert np.max(braided.steps) < 1.5 * np.median(braided.steps)
     moved_0, moved_180 = (np.max(np.linalg.norm(braided.centerlines[k] - plain.centerlines[k], axis=1)) for k in (0, -1))
-    assert moved_180 > 1.0 and moved_180 > 3.0 * moved_0  # measured: 3.67 mm and 0.41 mm
+    assert moved_180 > 1.0 and moved_180 > 3.0 * moved_0  # measured: 3.34 mm and 0.38 mm
     twisted = solve(_braided(demo_problem(180.0, 40), braid))
     effective = twisted.twisting_moment / twisted.twist_rate
-    assert np.all(effective > problem.hose.torsional_stiffness)
+    assert np.all(effective > 1.01 * problem.hose.torsional_stiffness)  # measured: 1.025-1.034 GJ
