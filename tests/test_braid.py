@@ -1,9 +1,11 @@
 """The braid coupling (mechanics/braid.py, model/braid.py): its closed form against quadrature, exact
 derivatives against finite differences in every regime of the strands, hand-derived torque and bending
 stiffness of a twisted hose, the exact limits (always slack: the plain hose; no slack: a linear stiffness),
-and the thesis hose's twist path with a braid."""
+the thesis hose's twist path with a braid, and [hose.braid] in the problem file."""
 
+import copy
 import math
+import tomllib
 from dataclasses import replace
 
 import numpy as np
@@ -12,6 +14,7 @@ from scipy.integrate import quad
 from test_energy_derivatives import dense, finite_differences, random_frames
 
 from hoseline.demos.thesis_hose import demo_problem
+from hoseline.io.problem_file import ProblemFileError, problem_from_dict, problem_to_toml
 from hoseline.mechanics.braid import braid_coefficients, family_terms
 from hoseline.mechanics.energy import BANDWIDTH, assemble, elastic_energy, joint_energy, joint_moments
 from hoseline.mechanics.rotations import rotation_matrix
@@ -221,3 +224,53 @@ def test_thesis_twist_path_with_a_braid_is_smooth_and_stiffer_in_torsion():
     twisted = solve(_braided(demo_problem(180.0, 40), braid))
     effective = twisted.twisting_moment / twisted.twist_rate
     assert np.all(effective > 1.01 * problem.hose.torsional_stiffness)  # measured: 1.025-1.034 GJ
+
+
+BRAIDED_FILE = {
+    "hose": {"length": 330.6, "outer_diameter": 10.1, "bending_stiffness": 149563.0, "torsion_factor": 25.0,
+             "segments": 40, "braid": {"angle_deg": 38.0, "strands": 12, "strand_axial_stiffness": 1500.0,
+                                       "slack_strain": 0.005, "radius": 3.7}},
+    "start": {"point": [0.0, 0.0, 0.0], "direction": [0.0, 1.0, 0.0]},
+    "end": {"point": [100.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0], "twist": 180.0},
+}
+
+
+def _with(path, value):
+    data = copy.deepcopy(BRAIDED_FILE)
+    *tables, key = path
+    table = data
+    for name in tables:
+        table = table[name]
+    table[key] = value
+    return data
+
+
+@pytest.mark.parametrize("radius", [3.7, None])
+def test_problem_file_round_trip_keeps_the_braid(radius):
+    data = _with(("hose", "braid", "radius"), radius)
+    if radius is None:
+        del data["hose"]["braid"]["radius"]
+    problem = problem_from_dict(data)
+    assert problem.hose.braid == Braid(38.0, 12, 1500.0, 0.005, radius)
+    text = problem_to_toml(problem)
+    assert "[hose.braid]" in text and ("radius = 3.7" in text) == (radius is not None)
+    assert problem_from_dict(tomllib.loads(text)).hose == problem.hose
+
+
+@pytest.mark.parametrize("path, value, message", [
+    (("hose", "braid", "angle_deg"), 90.0, "hose.braid.angle_deg = 90.0: must lie in [0, 89] degrees from the hose axis"),
+    (("hose", "braid", "strands"), 0, "hose.braid.strands = 0: must be a whole number of strands per family"),
+    (("hose", "braid", "strand_axial_stiffness"), -1.0, "hose.braid.strand_axial_stiffness = -1.0: must be positive (N)"),
+    (("hose", "braid", "slack_strain"), 5.0, "hose.braid.slack_strain = 5.0: must lie in [0, 1]: a strain as a fraction"),
+    (("hose", "braid", "radius"), 9.0, "hose.braid.radius = 9.0 mm is outside the hose (outer radius 5.05 mm)"),
+    (("hose", "braid", "strand_axial_stiffness"), 1e7, "more than 1000 times EI = 149563 N*mm^2: give EA of one strand"),
+    (("hose", "braid", "anglee"), 38.0, "unknown key 'hose.braid.anglee': did you mean 'hose.braid.angle_deg'?"),
+    (("hose", "stiffeners"), {"angle_deg": 71.0, "table": [[0.0, 0.0], [1.0, 10.0]]},
+     "[hose.braid] with [hose.stiffeners]: both model the braid"),
+    (("clips",), [{"type": "ball", "arc_length": 165.3, "point": [50.0, 50.0, 0.0]}],
+     "[hose.braid] with [[clips]]: a braided hose with clips is not implemented yet"),
+])
+def test_problem_file_refuses_a_bad_braid(path, value, message):
+    with pytest.raises(ProblemFileError) as refused:
+        problem_from_dict(_with(path, value))
+    assert message in str(refused.value)

@@ -4,13 +4,10 @@ fit_centerline) of a finer model with a known braid, and what the scans cannot t
 from dataclasses import replace
 
 import pytest
-from validation_cases import RADIUS, brake_hose
+from validation_cases import brake_hose, scan_cases
 
-from hoseline import solve
 from hoseline.model.braid import Braid
-from hoseline.procedures.scans.calibration import ScanCase, calibrate
-from hoseline.procedures.scans.centerline_fit import fit_centerline
-from hoseline.procedures.scans.synthetic_scan import ScanDefects, synthetic_scan
+from hoseline.procedures.scans.calibration import calibrate
 
 TRUE_BRAID = Braid(38.0, 12, 1500.0, 0.005, 3.7)  # n EA_s = 18 000 N, slack 0.5 %
 START = Braid(38.0, 12, 750.0, 0.01, 3.7)  # half the stiffness, twice the slack
@@ -23,13 +20,7 @@ def with_braid(problem, braid, segments):
 @pytest.fixture(scope="module")
 def scans():
     """Truth: 96 segments, the heavy thesis hose with TRUE_BRAID at 0 and 180 degrees; scans all round, 0.05 mm noise."""
-    defects = ScanDefects(density=0.5, noise=0.05, outlier_fraction=0.0)
-    cases = []
-    for seed, twist in enumerate((0.0, 180.0)):
-        truth = solve(with_braid(brake_hose(twist=twist), TRUE_BRAID, 96), estimate_error=False)
-        points = synthetic_scan(truth.s, truth.centerline, RADIUS, defects, seed=seed)
-        cases.append(ScanCase(twist, fit_centerline(points, RADIUS, start_hint=truth.centerline[0]).points))
-    return cases
+    return scan_cases(lambda twist: with_braid(brake_hose(twist=twist), TRUE_BRAID, 96))
 
 
 def test_recovers_the_braid_from_scans_at_two_twists(scans):
