@@ -274,3 +274,25 @@ def test_problem_file_refuses_a_bad_braid(path, value, message):
     with pytest.raises(ProblemFileError) as refused:
         problem_from_dict(_with(path, value))
     assert message in str(refused.value)
+
+
+@pytest.mark.parametrize("twist", [0.0, 0.4])
+def test_straight_hose_without_slack_has_the_linear_braids_derivatives(twist):
+    """Exactly straight (kappa_b = 0; untwisted: both families at a = b = 0, where one family's second derivatives
+    jump) with eps0 = 0: gradient and Hessian equal those of the plain rod with EI + n EA_s r^2 cos^3(beta) / 2 and
+    GJ + n EA_s r^2 sin^2(beta) cos(beta), to rounding."""
+    segments, h = 6, 0.8
+    frames = _twisted_frames(twist * (np.arange(segments) + 0.5) / segments)
+    start, end = np.eye(3), _twisted_frames([twist])[0]
+    stiffness = np.array([1.0, 1.3, 0.7])
+    beta = math.radians(ANGLE_DEG)
+    taut = STRANDS * STRAND_EA * RADIUS**2
+    bending = 0.5 * taut * math.cos(beta) ** 3
+    linear = stiffness + np.array([bending, bending, taut * math.sin(beta) ** 2 * math.cos(beta)])
+    loads = np.zeros((segments, 3))
+    braid = braid_coefficients(STRANDS, STRAND_EA, ANGLE_DEG, RADIUS, 0.0)
+    energy, grad, band = _lagrangian(frames, start, end, stiffness, h, loads, True, None, braid)
+    expected_energy, expected_grad, expected_band = _lagrangian(frames, start, end, linear, h, loads, True, None, None)
+    assert energy == pytest.approx(expected_energy, rel=1e-12, abs=1e-15)
+    assert np.allclose(grad, expected_grad, rtol=1e-12, atol=1e-14)
+    assert np.allclose(band, expected_band, rtol=1e-12, atol=1e-12 * np.max(np.abs(expected_band)))

@@ -52,8 +52,13 @@ def family_terms(a, b):
 
     a >= 0: bending strain amplitude alpha kappa_b.  b: the family's twist strain beyond its slack.
     Returns (I, I_b, I_bb, I_a / a, I_aa - I_a / a, I_ab); the last two are zero unless the family is
-    taut over part of the circumference only (|b| < a), so none divides by a = 0.
+    taut over part of the circumference only (|b| < a), so none divides by a = 0.  At a = b = 0 (a family
+    exactly at its slack on a straight hose, where the second derivatives jump) it returns their limit
+    along b = 0, taut on half the section: the two families of a braid without slack then sum to the
+    derivatives of their exact quadratic b^2 + a^2 / 2.
     """
+    if a == 0.0 and b == 0.0:
+        return 0.0, 0.0, 1.0, 0.5, 0.0, 2.0 / math.pi
     if b <= -a:  # slack all round (and the straight hose at or below the slack strain)
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     if b >= a:  # taut all round: the linear strand
