@@ -3,8 +3,9 @@
 A braided hose's reinforcement is two families of strands wound in opposite senses at the braid
 angle beta to the hose axis.  A strand carries tension only, and only once stretched beyond its
 slack strain eps0 (the play of the braid on the liner).  Twisting the hose stretches one family
-and slackens the other, so once the stretched family is taut all round it adds to the bending
-stiffness: the bending stiffness grows with twist (docs/model.md, "The continuous counterpart").
+and slackens the other: a hose bent less than the slack bends stiffer once twisted beyond it (the
+stretched family taut all round), while a hose bent beyond the slack feels twist only at second
+order (docs/model.md, "The continuous counterpart").
 The solver's term is mechanics/braid.py.  Units: mm, N, degrees at this boundary.
 """
 
