@@ -50,16 +50,18 @@ def _lagrangian(frames, start, end, stiffness, h, loads, roll_free, rest, braid)
 
 
 def _regimes(frames, start, end, h, braid, rest):
-    """Which regimes the strand families are in at the joints: 'slack', 'partly taut', 'taut'."""
-    _, darboux = joint_moments(frames, start, end, np.ones(3), h, True, None, rest)
-    if rest is not None:  # the strands strain with the deviation from the stress-free joint rotation
-        turned = [r.T @ f for r, f in zip(rest, np.concatenate([start[None], frames]))]
-        _, darboux = zip(*[joint_moments(np.array([fb]), fa, fb, np.ones(3), h, False)
-                           for fa, fb in zip(turned, np.concatenate([frames, end[None]]))])
-        darboux = np.array([d[0] for d in darboux])
+    """Which regimes the strand families are in at the joints: 'slack', 'partly taut', 'taut'.
+
+    A joint's Darboux vector 2 a / (c l) from Q = A B^T (energy.py), A turned back by the joint's stress-free
+    rotation when there is a preset (the strands strain with the deviation from it)."""
+    ends = np.concatenate([start[None], frames, end[None]])
+    lengths = np.full(len(ends) - 1, h)
+    lengths[[0, -1]] = 0.5 * h
     coefficient, bend_arm, twist_arm, slack = braid
     found = set()
-    for k0, k1, k2 in darboux:
+    for joint, (frame_a, frame_b, length) in enumerate(zip(ends[:-1], ends[1:], lengths)):
+        q = (frame_a if rest is None else rest[joint].T @ frame_a) @ frame_b.T
+        k0, k1, k2 = 2.0 * np.array([q[2, 1] - q[1, 2], q[0, 2] - q[2, 0], q[1, 0] - q[0, 1]]) / ((1.0 + np.trace(q)) * length)
         a = bend_arm * math.hypot(k0, k1)
         for sign in (1.0, -1.0):
             b = sign * twist_arm * k2 - slack
