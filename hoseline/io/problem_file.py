@@ -787,7 +787,7 @@ def _braid(section: HoseSection, bending: float) -> Braid | None:
         raise ValueError(
             f"hose.braid.strand_axial_stiffness = {_show(spec.strand_axial_stiffness)} N with strands = {spec.strands} "
             f"gives a taut braid n EA_s r^2 cos^3(angle) = {taut:.3g} N*mm^2, more than {largest:g} times EI = "
-            f"{bending:.6g} N*mm^2: give EA of one strand in N (not N*mm^2 or per family of hoses)")
+            f"{bending:.6g} N*mm^2: give EA of one strand in N (per strand, not per family; N, not N*mm^2)")
     return braid
 
 
