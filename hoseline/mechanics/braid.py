@@ -1,4 +1,4 @@
-"""Braid coupling: tension-only strands that make the bending stiffness grow with twist (docs/model.md).
+"""Braid coupling: tension-only strands at +-beta to the hose axis, their energy per length and its derivatives.
 
 Two families of n strands each (axial stiffness EA_s, N) are wound on radius r at +-beta to the
 hose axis.  A strand at angle theta round the section (from the outside of the bend) takes the strain
@@ -11,7 +11,7 @@ carries tension only beyond its slack strain eps0.  Per hose length the braid st
     W(kappa) = C sum_+- I(alpha kappa_b, +-gamma tau - eps0),   C = n EA_s / (2 cos(beta)),
     I(a, b) = (1/2 pi) int (a cos(theta) + b)_+^2 d(theta)   (closed form in family_terms).
 
-W is even in (kappa_1, kappa_2) and in tau, so the braid has no linear twist-bending term; the
+W is even in (kappa_1, kappa_2) and in tau, so the braid has no linear twist-bending term (docs/model.md); the
 coupling is that a family stretched by twist and taut all round adds C alpha^2 = n EA_s r^2
 cos^3(beta) / 2 to the bending stiffness.  With eps0 = 0 the two families together store exactly
 the quadratic C (alpha^2 kappa_b^2 + 2 gamma^2 tau^2) / 2, half of the linear braid's energy.
