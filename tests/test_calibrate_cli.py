@@ -68,3 +68,15 @@ def test_calibrated_toml_writes_the_factor_with_the_problem_files_poisson_ratio(
     assert written["torsion_factor"] == pytest.approx(factor["value"], rel=1e-12)
     hose = load_problem(tmp_path / "cal" / "calibrated.toml").hose
     assert hose.torsional_stiffness == pytest.approx(factor["value"] * hose.bending_stiffness / 1.3, rel=1e-12)
+
+
+def test_a_braid_parameter_without_a_braid_is_bad_input(tmp_path):
+    """--fit braid_stiffness on a problem file without [hose.braid]: exit 2 naming what to add, before any solving."""
+    problem = tmp_path / "hose.toml"
+    problem.write_text(problem_to_toml(brake_hose(segments=24)))
+    scan = write_ply(tmp_path / "scan.ply", [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]])
+    code, output = run("calibrate", problem, scan, "--twist", 0, "-o", tmp_path / "cal", "--fit", "braid_stiffness")
+    assert code == common.BAD_INPUT, output
+    assert "cannot fit braid_stiffness: give [hose.braid] in the problem file" in output
+    assert not (tmp_path / "cal").exists()
+

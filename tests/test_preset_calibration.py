@@ -5,13 +5,10 @@ import math
 from dataclasses import replace
 
 import pytest
-from validation_cases import RADIUS, brake_hose
+from validation_cases import brake_hose, scan_cases
 
-from hoseline import solve
 from hoseline.model.preset import Preset
-from hoseline.procedures.scans.calibration import ScanCase, calibrate
-from hoseline.procedures.scans.centerline_fit import fit_centerline
-from hoseline.procedures.scans.synthetic_scan import ScanDefects, synthetic_scan
+from hoseline.procedures.scans.calibration import calibrate
 
 TRUE_SET = Preset(1.0 / 300.0, 60.0)  # a radius of set of 300 mm, towards 60 deg from the start fitting's d1
 
@@ -24,12 +21,7 @@ def test_recovers_the_preset_from_scans_at_two_twists():
     """Truth: 96 segments; scans all round, 0.05 mm noise; model: 32 segments from no set at all.
     Measured: radius 302.9 mm (+1.0 %, 1.3 sigma), angle 59.6 deg (0.6 deg sigma); mean deviation 33 mm before,
     0.15-0.17 mm after (the 32-segment model's discretisation)."""
-    defects = ScanDefects(density=0.5, noise=0.05, outlier_fraction=0.0)
-    cases = []
-    for seed, twist in enumerate((0.0, 180.0)):
-        truth = solve(with_preset(brake_hose(twist=twist), TRUE_SET, 96), estimate_error=False)
-        points = synthetic_scan(truth.s, truth.centerline, RADIUS, defects, seed=seed)
-        cases.append(ScanCase(twist, fit_centerline(points, RADIUS, start_hint=truth.centerline[0]).points))
+    cases = scan_cases(lambda twist: with_preset(brake_hose(twist=twist), TRUE_SET, 96))
     calibration = calibrate(with_preset(brake_hose(), None, 32), cases, ["preset_curvature", "preset_angle"])
     fitted = {p.name: p for p in calibration.parameters}
     curvature, angle = fitted["preset_curvature"], fitted["preset_angle"]

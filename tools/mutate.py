@@ -42,6 +42,7 @@ PHYSICS_TESTS = (
     "tests/test_placement.py",
     "tests/test_validation.py",
     "tests/test_calibration.py",
+    "tests/test_braid.py",
 )
 
 
@@ -111,9 +112,21 @@ MUTATIONS = (
              "return -problem.hose.mass_per_length * problem.gravity * 1e-3",
              "gravity pointing up"),
     Mutation("clamp-joint-length", "hoseline/mechanics/energy.py",
-             "energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab)",
-             "energy = joint_terms_into(start_frame, frames[0], stiffness, h, g, haa, hab)",
+             "energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab, braid)",
+             "energy = joint_terms_into(start_frame, frames[0], stiffness, h, g, haa, hab, braid)",
              "start clamp joint a whole segment long instead of half"),
+    Mutation("braid-x2", "hoseline/mechanics/braid.py",
+             "strands * strand_axial_stiffness / (2.0 * math.cos(beta)),",
+             "strands * strand_axial_stiffness / math.cos(beta),",
+             "braid strands twice as stiff (the coefficient n EA_s / (2 cos beta))"),
+    Mutation("braid-twist-sign", "hoseline/mechanics/braid.py",
+             "w2 += sign * twist_arm * slope_b",
+             "w2 += twist_arm * slope_b",
+             "both strand families stretched by twist (the sense of the family dropped from the twist gradient)"),
+    Mutation("braid-bending-arm", "hoseline/mechanics/braid.py",
+             "radius * math.cos(beta) ** 2,",
+             "radius * math.cos(beta),",
+             "a strand's bending strain with cos(beta) instead of cos^2(beta)"),
 )
 
 

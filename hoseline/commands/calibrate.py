@@ -42,7 +42,7 @@ def calibrate_command(
 
     Units: mm, degrees."""
     from hoseline.io.problem_file import problem_to_toml
-    from hoseline.procedures.scans.calibration import ScanCase, calibrate
+    from hoseline.procedures.scans.calibration import ScanCase, calibrate, identifiable_parameters
     from hoseline.procedures.scans.deviation import Thresholds
     from hoseline.procedures.scans.validation import compare_scan
     from hoseline.report.validation import write_validation_report
@@ -58,6 +58,10 @@ def calibrate_command(
     if unknown or not names:
         reason = f"unknown parameter {unknown[0]!r}" if unknown else "no parameter given"
         raise fail(f"--fit {fit!r}: {reason}; choose from {', '.join(PARAMETERS)}", BAD_INPUT)
+    try:  # a parameter the problem cannot start from (a braid's, without [hose.braid])
+        identifiable_parameters(problem, names)
+    except ValueError as exc:
+        raise fail(f"--fit {fit!r}: {exc}", BAD_INPUT) from None
     clouds = [load_scan(path) for path in scans]
     with errors_to_exit_codes(out):
         compile_solver(quiet)

@@ -28,6 +28,7 @@ What the thesis' generator wrote (Thomas 2004, chapter II and appendix D), at th
 - with stiffeners (model/stiffeners.py), the thesis' off-axis springs between adjacent parts
   as its line forces (Figure 27): one spline of force against marker distance and a
   single_component_force AKISPL(DM(I, J), 0, spline, 0) per spring (_stiffener_springs).
+  A braid (model/braid.py) is not written: a comment says the beams carry EI and GJ only.
 
 Units mm, kg, N, s, degrees.  The commands and parameter names follow the ADAMS/View command
 language as ADAMS/View itself writes .cmd files; the file was checked against that
@@ -170,6 +171,9 @@ def adams_cmd_text(result: Result, section: BeamSection | None = None) -> str:
         f"Beam section: E = {section.youngs_modulus:.6g} N/mm^2, G = {section.shear_modulus:.6g} N/mm^2, "
         f"A = {section.area:.6g} mm^2, Ixx = {section.ixx:.6g}, Iyy = {section.iyy:.6g}, Izz = {section.izz:.6g} mm^4",
     )
+    if hose.braid is not None:
+        out.comment("The hose's braid ([hose.braid], tension-only strands) has no ADAMS element here: the beams carry "
+                    "EI and GJ only,", "so this model lacks the stiffening of taut strands.")
     out.command("defaults units", length="mm", angle="deg", force="newton", mass="kg", time="sec")
     out.command("defaults units", coordinate_system_type="cartesian", orientation_type="body313")
     out.command("model create", model_name=model[1:])

@@ -66,6 +66,16 @@ the preset's) or the springs given::
     angle_deg = 71.0                 # degrees from the section plane, (0, 90]
     table = [[0.0, 0.0], [0.2, 0.0], [0.21, 2500.0]]  # [deformation mm, force N], tension positive
 
+A braided hose's strands as a stiffness term (model/braid.py, docs/model.md "The continuous
+counterpart"), optional; not with [hose.stiffeners] (both model the braid) or [[clips]]::
+
+    [hose.braid]
+    angle_deg = 38.0                 # degrees, strands to the hose axis, [0, 89]
+    strands = 12                     # per family (two families at +-angle_deg)
+    strand_axial_stiffness = 1500.0  # EA of one strand, N
+    slack_strain = 0.005             # optional, default 0: strain before a strand carries tension
+    radius = 3.7                     # mm, optional, of the braid layer (default: the hose's outer radius)
+
 End fittings (model/fittings.py): [fittings.start] and [fittings.end] make [start] and [end] the ports
 (seal face centres) and put a rigid fitting between each port and the flexible hose; [hose] then takes
 either length (the free, cut length) or overall_length (the catalogue's, fittings included)::
@@ -130,6 +140,8 @@ from hoseline.model.hose import (
     isotropic_torsional_stiffness,
 )
 from hoseline.model import limits
+from hoseline.model.braid import LARGEST_ANGLE_DEG as LARGEST_BRAID_ANGLE_DEG
+from hoseline.model.braid import Braid
 from hoseline.model.clips import Clip
 from hoseline.model.fittings import EndFittings, Fitting
 from hoseline.model.mounts import Mount
@@ -171,6 +183,11 @@ _UNITS = {
     "angle_deg": "degrees, spring to the section plane",
     "table": "[deformation mm, force N] pairs, tension positive",
     "preset": "\"thesis\": chapter IV angle, table and segments",
+    "braid.angle_deg": "degrees, strands to the hose axis",
+    "strands": "strands per family (two families at +-angle_deg)",
+    "strand_axial_stiffness": "EA of one strand, N",
+    "slack_strain": "strain a strand takes before it carries tension",
+    "braid.radius": "mm, of the braid layer",
     "preset_radius": "mm, radius of the set from storage (natural curvature)",
     "preset_angle_deg": "degrees, side of the set about the hose axis from the start fitting's d1",
     "overall_length": "mm, fittings included (catalogue length)",
@@ -349,6 +366,36 @@ class StiffenersSection(_Section):
         return self
 
 
+def _braid_strands(value: int) -> int:
+    if not 1 <= value <= limits.BRAID_STRANDS:
+        raise ValueError(f"must be a whole number of strands per family, 1 to {limits.BRAID_STRANDS}")
+    return value
+
+
+def _braid_angle(value: float) -> float:
+    if not (math.isfinite(value) and 0.0 <= value <= LARGEST_BRAID_ANGLE_DEG):
+        raise ValueError(f"must lie in [0, {LARGEST_BRAID_ANGLE_DEG:g}] degrees from the hose axis (braid angle; "
+                         "a catalogue's 54.7 degrees is the neutral angle, measured from the axis too)")
+    return value
+
+
+def _braid_slack(value: float) -> float:
+    if not (math.isfinite(value) and 0.0 <= value <= limits.BRAID_SLACK_STRAIN):
+        raise ValueError(f"must lie in [0, {limits.BRAID_SLACK_STRAIN:g}]: a strain as a fraction (0.005 for 0.5 %)")
+    return value
+
+
+class BraidSection(_Section):
+    """[hose.braid]: two families of tension-only strands at +-angle_deg to the hose axis (model/braid.py; mm, N, degrees)."""
+
+    angle_deg: Annotated[float, AfterValidator(_braid_angle)]
+    strands: Annotated[int, AfterValidator(_braid_strands)]
+    strand_axial_stiffness: Annotated[float, _in_range(limits.BRAID_STRAND_STIFFNESS_N, "N",
+                                                       "a fine yarn to a 10 mm steel rope")]
+    slack_strain: Annotated[float, AfterValidator(_braid_slack)] = 0.0
+    radius: Annotated[float, _in_range(limits.OUTER_DIAMETER_MM, "mm", "of the braid layer")] | None = None
+
+
 class HoseSection(_Section):
     """[hose]: geometry, stiffness, weight and limits (mm, N*mm^2, N/mm^2, kg/m)."""
 
@@ -365,6 +412,7 @@ class HoseSection(_Section):
     min_bend_radius: Annotated[float, _not_negative("mm", limits.LENGTH_MM[1])] | None = None
     segments: Annotated[int, AfterValidator(_segments)] = DEFAULT_SEGMENTS
     stiffeners: StiffenersSection | None = None
+    braid: BraidSection | None = None
     preset_radius: Annotated[float, _in_range(limits.LENGTH_MM, "mm", "1 mm to 100 m")] | None = None
     preset_angle_deg: Annotated[float, AfterValidator(_angle)] | None = None
 
@@ -704,6 +752,7 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             bending_stiffness_2=spec.hose.bending_stiffness_2,
             stiffeners=stiffeners,
             preset=_preset(spec.hose),
+            braid=_braid(spec.hose, bending),
         )
         if hose.preset is not None and spec.clips:
             raise ValueError("hose.preset_radius with [[clips]]: a preset hose with clips is not implemented yet; "
@@ -734,6 +783,23 @@ def _preset(section: HoseSection) -> Preset | None:
                              "give preset_radius (mm, radius of the set) or remove preset_angle_deg")
         return None
     return Preset(1.0 / section.preset_radius, section.preset_angle_deg or 0.0)
+
+
+def _braid(section: HoseSection, bending: float) -> Braid | None:
+    """The Braid of [hose.braid] (None without it); refuses a braid a thousand times stiffer in bending than the hose."""
+    spec = section.braid
+    if spec is None:
+        return None
+    braid = Braid(spec.angle_deg, spec.strands, spec.strand_axial_stiffness, spec.slack_strain, spec.radius)
+    radius = braid.layer_radius(0.5 * section.outer_diameter)
+    taut = braid.stiffness * radius**2 * math.cos(math.radians(braid.angle_deg)) ** 3
+    largest = limits.STIFFNESS_RATIO[1]
+    if taut > largest * bending:
+        raise ValueError(
+            f"hose.braid.strand_axial_stiffness = {_show(spec.strand_axial_stiffness)} N with strands = {spec.strands} "
+            f"gives a taut braid n EA_s r^2 cos^3(angle) = {taut:.3g} N*mm^2, more than {largest:g} times EI = "
+            f"{bending:.6g} N*mm^2: give EA of one strand in N (per strand, not per family; N, not N*mm^2)")
+    return braid
 
 
 def _stiffeners(section: HoseSection) -> tuple[Stiffeners | None, int]:
@@ -1011,6 +1077,14 @@ def problem_to_dict(problem: Problem, poisson_ratio: float | None = None) -> dic
     if hose.preset is not None and hose.preset.curvature > 0.0:
         hose_dict["preset_radius"] = float(hose.preset.radius)
         hose_dict["preset_angle_deg"] = float(hose.preset.angle_deg)
+    if hose.braid is not None:
+        braid = hose.braid
+        hose_dict["braid"] = {
+            "angle_deg": float(braid.angle_deg),
+            "strands": int(braid.strands),
+            "strand_axial_stiffness": float(braid.strand_axial_stiffness),
+            "slack_strain": float(braid.slack_strain),
+        } | ({} if braid.radius is None else {"radius": float(braid.radius)})
     if hose.stiffeners is not None:  # written out explicitly (a preset's angle and table included)
         stiffeners = hose.stiffeners
         hose_dict["stiffeners"] = {
@@ -1082,11 +1156,11 @@ def problem_to_toml(problem: Problem, poisson_ratio: float | None = None) -> str
                     if name not in nested and name not in arrays:
                         text = f"{name} = {_toml_value(item)}"
                         lines.append(f"{text:<45} # {_UNITS.get(f'{key}.{name}', _UNITS.get(name))}")
-                for name, inner in nested.items():  # a table inside this one: [hose.stiffeners]
+                for name, inner in nested.items():  # a table inside this one: [hose.stiffeners], [hose.braid]
                     lines.append(f"\n[{key}.{name}]")
                     for inner_name, item in inner.items():
                         text = f"{inner_name} = {_toml_value(item)}"
-                        lines.append(f"{text:<45} # {_UNITS.get(inner_name)}")
+                        lines.append(f"{text:<45} # {_UNITS.get(f'{name}.{inner_name}', _UNITS.get(inner_name))}")
                 for name, entries in arrays.items():
                     for entry in entries:
                         lines.append(f"\n[[{key}.{name}]]")

@@ -39,6 +39,12 @@ the kernel's gradient and Hessian with respect to delta_a are exact for the pres
 The Darboux vector of Q' is kappa - kappa0 to first order; the energy is zero exactly at the
 stress-free shape.  With rest None (the default) Numba compiles the branch away.
 
+Braid coupling.  Optionally (`braid`, see mechanics/braid.py) every joint adds l W_braid(kappa),
+the energy of tension-only strands at +-beta, a function of the same Darboux vector kappa = 2 a / (c l):
+its derivatives in u = (a, c) come from braid.joint_terms by the chain rule and join E_u and E_uu
+(which then couple the components of a); the mapping to the rotations below is unchanged.  With
+braid None (the default) Numba compiles that branch away.
+
 Written by hand (Numba) because no library offers this rod; everything is a plain
 loop over joints so the cost is linear in N.
 """
@@ -48,6 +54,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from hoseline.mechanics.braid import joint_energy as braid_joint_energy
+from hoseline.mechanics.braid import joint_terms as braid_joint_terms
 from hoseline.mechanics.stiffeners import FULL, HALF, spring_energy, spring_terms_into
 
 BANDWIDTH = 5  # half bandwidth of the Hessian: 3x3 blocks, neighbours only
@@ -80,11 +88,12 @@ def _combine(s0, u0, s1, u1, s2, u2):
 
 
 @njit(cache=True)
-def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab):
+def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid=None):
     """Energy (returned), gradient and Hessian blocks of one elastic joint, written into given arrays.
 
     frame_a, frame_b: 3x3 frames (rows = directors).  stiffness: (EI1, EI2, GJ) N*mm^2.
-    joint_length: mm.  grad_a (3,), hess_aa, hess_ab (3, 3): outputs; the second-order term is
+    joint_length: mm.  braid: the braid coupling's data (mechanics/braid.py) or None for none.
+    grad_a (3,), hess_aa, hess_ab (3, 3): outputs; the second-order term is
     1/2 da.Haa.da + 1/2 db.Hbb.db + da.Hab.db (hess_ab is not symmetric), and grad_b = -grad_a,
     hess_bb = hess_aa because the energy depends on the relative rotation only.
     Written with scalars and 3-tuples: 3x3 products through BLAS and small temporary arrays
@@ -114,6 +123,14 @@ def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa,
     e_a0a0, e_a1a1, e_a2a2 = f * k0, f * k1, f * k2
     e_a0c, e_a1c, e_a2c = -2.0 * e_a0 / c, -2.0 * e_a1 / c, -2.0 * e_a2 / c
     e_cc = 6.0 * energy / c2
+    e_a0a1 = e_a0a2 = e_a1a2 = 0.0  # the braid couples the components of kappa
+    if braid is not None:
+        (b_e, b_a0, b_a1, b_a2, b_c, b_a0a0, b_a1a1, b_a2a2, e_a0a1, e_a0a2, e_a1a2, b_a0c, b_a1c, b_a2c,
+         b_cc) = braid_joint_terms(a0, a1, a2, c, joint_length, braid)
+        energy += b_e
+        e_a0, e_a1, e_a2, e_c = e_a0 + b_a0, e_a1 + b_a1, e_a2 + b_a2, e_c + b_c
+        e_a0a0, e_a1a1, e_a2a2 = e_a0a0 + b_a0a0, e_a1a1 + b_a1a1, e_a2a2 + b_a2a2
+        e_a0c, e_a1c, e_a2c, e_cc = e_a0c + b_a0c, e_a1c + b_a1c, e_a2c + b_a2c, e_cc + b_cc
 
     # b_u = du/d(delta_a) (du/d(delta_b) = -b_u).  dQ_kl/d(delta_a) = d_k^A x d_l^B summed
     # with the Levi-Civita identity:  d(a_m)/d(delta_a) = sum_x (Q_mx - delta_mx tr Q) d_x^A,
@@ -143,6 +160,9 @@ def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa,
                 e_a0a0 * bu0[x] * bu0[y] + e_a1a1 * bu1[x] * bu1[y] + e_a2a2 * bu2[x] * bu2[y]
                 + e_cc * bu3[x] * bu3[y] + border[x] * bu3[y] + bu3[x] * border[y]
             )
+            if braid is not None:
+                first += (e_a0a1 * (bu0[x] * bu1[y] + bu1[x] * bu0[y]) + e_a0a2 * (bu0[x] * bu2[y] + bu2[x] * bu0[y])
+                          + e_a1a2 * (bu1[x] * bu2[y] + bu2[x] * bu1[y]))
             hess_aa[x, y] = hess_aa[y, x] = first + 0.5 * (t[y][x] + t[x][y])
             hess_ab[x, y] = -first - t[x][y]
             hess_ab[y, x] = -first - t[y][x]
@@ -161,12 +181,12 @@ def rest_turned_into(rest_rotation, frame, out):
 
 
 @njit(cache=True)
-def _preset_joint_terms(frame_a, frame_b, stiffness, joint_length, rest, joint, turned, grad_a, hess_aa, hess_ab):
+def _preset_joint_terms(frame_a, frame_b, stiffness, joint_length, rest, joint, turned, grad_a, hess_aa, hess_ab, braid):
     # joint_terms_into of joint `joint`, relative to its stress-free rotation rest[joint] when rest is given
     if rest is None:
-        return joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab)
+        return joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid)
     rest_turned_into(rest[joint], frame_a, turned)
-    return joint_terms_into(turned, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab)
+    return joint_terms_into(turned, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid)
 
 
 @njit(cache=True)
@@ -182,36 +202,40 @@ def _axial_and_c(frame_a, frame_b):
 
 
 @njit(cache=True)
-def joint_energy(frame_a, frame_b, stiffness, joint_length):
+def joint_energy(frame_a, frame_b, stiffness, joint_length, braid=None):
     """Energy of one joint only (N*mm); see joint_terms_into."""
     a0, a1, a2, c = _axial_and_c(frame_a, frame_b)
-    return 2.0 / joint_length * (stiffness[0] * a0**2 + stiffness[1] * a1**2 + stiffness[2] * a2**2) / c**2
+    energy = 2.0 / joint_length * (stiffness[0] * a0**2 + stiffness[1] * a1**2 + stiffness[2] * a2**2) / c**2
+    if braid is not None:
+        energy += braid_joint_energy(a0, a1, a2, c, joint_length, braid)
+    return energy
 
 
 @njit(cache=True)
-def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None, rest=None):
+def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None, rest=None, braid=None):
     """Total elastic energy (N*mm) of the rod; the last joint only when the end is clamped.
 
     springs: stiffener springs (mechanics/stiffeners.py) or None.  rest: (N+1, 3, 3)
     stress-free joint rotations (model/preset.py) or None for a straight, untwisted hose.
+    braid: the braid coupling (mechanics/braid.py) or None.
     """
     n = frames.shape[0]
     if rest is not None:
         turned = np.empty((3, 3))
         rest_turned_into(rest[0], start_frame, turned)
-        total = joint_energy(turned, frames[0], stiffness, 0.5 * h)
+        total = joint_energy(turned, frames[0], stiffness, 0.5 * h, braid)
         for i in range(n - 1):
             rest_turned_into(rest[i + 1], frames[i], turned)
-            total += joint_energy(turned, frames[i + 1], stiffness, h)
+            total += joint_energy(turned, frames[i + 1], stiffness, h, braid)
         if end_clamped:
             rest_turned_into(rest[n], frames[n - 1], turned)
-            total += joint_energy(turned, end_frame, stiffness, 0.5 * h)
+            total += joint_energy(turned, end_frame, stiffness, 0.5 * h, braid)
         return total
-    total = joint_energy(start_frame, frames[0], stiffness, 0.5 * h)
+    total = joint_energy(start_frame, frames[0], stiffness, 0.5 * h, braid)
     for i in range(n - 1):
-        total += joint_energy(frames[i], frames[i + 1], stiffness, h)
+        total += joint_energy(frames[i], frames[i + 1], stiffness, h, braid)
     if end_clamped:
-        total += joint_energy(frames[n - 1], end_frame, stiffness, 0.5 * h)
+        total += joint_energy(frames[n - 1], end_frame, stiffness, 0.5 * h, braid)
     if springs is not None:
         total += spring_energy(start_frame, frames[0], springs, HALF)
         for i in range(n - 1):
@@ -240,7 +264,7 @@ def _add_lower_block_transposed(band, row0, col0, block):
 @njit(cache=True)
 def assemble(
     frames, start_frame, end_frame, stiffness, h, segment_loads, roll_free, grad, band, end_clamped=True, springs=None,
-    rest=None,
+    rest=None, braid=None,
 ):
     """Elastic + segment energy of the rod, its gradient and its banded Hessian.
 
@@ -250,6 +274,7 @@ def assemble(
     appended after the 3N segment rotations.  end_clamped: False for a free tip (no end joint).
     springs: stiffener springs between the segments (mechanics/stiffeners.py), None for none.
     rest: (N+1, 3, 3) stress-free rotations of the joints (preset, model/preset.py), None for none.
+    braid: the braid coupling added to every joint (mechanics/braid.py), None for none.
     grad: (n,) output, band: (n, BANDWIDTH+1) output (lower band, band[i, k] = H[i, i-k]);
     both are overwritten.  Returns (elastic_energy, segment_energy) in N*mm.
     """
@@ -260,11 +285,11 @@ def assemble(
     haa = np.empty((3, 3))
     hab = np.empty((3, 3))
     if rest is None:  # the plain rod's calls stay as they are (a shared helper costs a third of this loop)
-        energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab)
+        energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab, braid)
     else:
         turned = np.empty((3, 3))
         rest_turned_into(rest[0], start_frame, turned)
-        energy = joint_terms_into(turned, frames[0], stiffness, 0.5 * h, g, haa, hab)
+        energy = joint_terms_into(turned, frames[0], stiffness, 0.5 * h, g, haa, hab, braid)
     if springs is not None:
         energy += spring_terms_into(start_frame, frames[0], springs, HALF, g, haa, hab)
     for x in range(3):  # element by element: a slice assignment compiles Numba's shape-error messages (0.5 s)
@@ -272,10 +297,10 @@ def assemble(
     _add_diag_block(band, 0, haa)
     for i in range(n_seg - 1):
         if rest is None:
-            energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab)
+            energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab, braid)
         else:
             rest_turned_into(rest[i + 1], frames[i], turned)
-            energy += joint_terms_into(turned, frames[i + 1], stiffness, h, g, haa, hab)
+            energy += joint_terms_into(turned, frames[i + 1], stiffness, h, g, haa, hab, braid)
         if springs is not None:
             energy += spring_terms_into(frames[i], frames[i + 1], springs, FULL, g, haa, hab)
         for x in range(3):
@@ -287,10 +312,10 @@ def assemble(
     last = 3 * (n_seg - 1)
     if end_clamped:
         if rest is None:
-            energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab)
+            energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab, braid)
         else:
             rest_turned_into(rest[n_seg], frames[n_seg - 1], turned)
-            energy += joint_terms_into(turned, end_frame, stiffness, 0.5 * h, g, haa, hab)
+            energy += joint_terms_into(turned, end_frame, stiffness, 0.5 * h, g, haa, hab, braid)
         if springs is not None:
             energy += spring_terms_into(frames[n_seg - 1], end_frame, springs, HALF, g, haa, hab)
         for x in range(3):
@@ -322,7 +347,7 @@ def assemble(
 
 
 @njit(cache=True)
-def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None, rest=None):
+def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None, rest=None, braid=None):
     """Internal moment (world, N*mm) and discrete Darboux vector (material, 1/mm) at the N+1 nodes.
 
     The moment at node j is dE_joint/d(delta_B): the moment exerted by the part of the
@@ -330,6 +355,7 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
     vector components are (bending about d1, bending about d2, twist rate).  A free tip
     carries no moment.  rest: stress-free joint rotations (preset) or None; the moment is
     then that of the joint's deviation from them, the Darboux vector stays the geometric one.
+    braid: the braid coupling (mechanics/braid.py) or None.
     """
     n_seg = frames.shape[0]
     g = np.empty(3)
@@ -345,7 +371,7 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
             fa, fb, length, kind = frames[n_seg - 1], end_frame, 0.5 * h, HALF
         else:
             fa, fb, length, kind = frames[j - 1], frames[j], h, FULL
-        _preset_joint_terms(fa, fb, stiffness, length, rest, j, turned, g, haa, hab)
+        _preset_joint_terms(fa, fb, stiffness, length, rest, j, turned, g, haa, hab, braid)
         if springs is not None:
             spring_terms_into(fa, fb, springs, kind, g, haa, hab)
         for x in range(3):

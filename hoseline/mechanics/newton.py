@@ -38,6 +38,8 @@ class RodProperties:
     the stiffener springs added at every joint, as packed by mechanics.stiffeners.spring_set.
     rest: the preset.  None (default): the hose is straight and untwisted when unloaded; else
     (N+1, 3, 3) stress-free relative rotations of the joints (model/preset.py, energy.py).
+    braid: the braid coupling.  None (default): none; else the data of mechanics.braid.braid_coefficients,
+    added to every joint.
     """
 
     stiffness: np.ndarray
@@ -45,6 +47,7 @@ class RodProperties:
     segments: int
     springs: tuple | None = None
     rest: np.ndarray | None = None
+    braid: np.ndarray | None = None
 
     @property
     def length(self) -> float:
@@ -91,7 +94,7 @@ def end_frame_of(clamps: Clamps, state: RodState) -> np.ndarray:
 @njit(cache=True)
 def _system_kernel(
     frames, start_point, start_frame, end_point, end_frame, stiffness, h, force, line_weight, roll_free, end_clamped,
-    springs, rest,
+    springs, rest, braid,
 ):
     """One pass over the rod: loads, energy, gradient, banded Hessian, constraint and its Jacobian."""
     n_seg = frames.shape[0]
@@ -100,7 +103,7 @@ def _system_kernel(
     band = np.empty((n, BANDWIDTH + 1))
     loads = segment_loads(frames, force, line_weight, h)
     elastic, _ = assemble(frames, start_frame, end_frame, stiffness, h, loads, roll_free, grad, band, end_clamped,
-                          springs, rest)
+                          springs, rest, braid)
     jac_t = np.zeros((n, 3))
     tip = start_point.copy()
     weight_potential = 0.0
@@ -149,6 +152,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
         clamps.end_clamped,
         props.springs,
         props.rest,
+        props.braid,
     )
     force = state.end_force if clamps.end_clamped else clamps.end_load
     residual = _residual(grad_max, gap, force, clamps.line_weight, props.largest_stiffness, props.length)
@@ -232,6 +236,7 @@ def _solve_equilibrium(props, clamps, state, tolerance, max_iterations, minimise
         max_iterations,
         props.springs,
         props.rest,
+        props.braid,
     )
     message = ("", "non-finite residual", "no acceptable step found", "iteration limit reached")[failure]
     new_state = RodState(frames, force if clamps.end_clamped else state.end_force, roll)
@@ -239,9 +244,11 @@ def _solve_equilibrium(props, clamps, state, tolerance, max_iterations, minimise
 
 
 def _refuse_preset_with_clips(props: RodProperties) -> None:
-    """The clipped rod (mechanics/clipped.py) has no preset terms: refuse rather than ignore the preset."""
+    """The clipped rod (mechanics/clipped.py) has no preset or braid terms: refuse rather than ignore them."""
     if props.rest is not None:
         raise ValueError("a preset hose with clips is not implemented: remove the preset keys or the clips")
+    if props.braid is not None:
+        raise ValueError("a braided hose with clips is not implemented: remove [hose.braid] or the clips")
 
 
 @njit(cache=True)
@@ -267,12 +274,12 @@ def _residual(grad_max, gap, force, line_weight, largest_stiffness, length):
 @njit(cache=True)
 def _state_system(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness, springs, rest,
+    roll_free, end_clamped, largest_stiffness, springs, rest, braid,
 ):
     """_system_kernel at a state with the end frame turned by `roll`, plus its relative residual."""
     energy, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
         frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
-        roll_free, end_clamped, springs, rest,
+        roll_free, end_clamped, springs, rest, braid,
     )
     residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, h * frames.shape[0])
     return energy, grad, band, jac_t, constraint, residual
@@ -281,7 +288,7 @@ def _state_system(
 @njit(cache=True)
 def _track_kernel(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs, rest,
+    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs, rest, braid,
 ):
     """Plain Newton iterations with step halving, all in compiled code (see solve_equilibrium).
 
@@ -291,7 +298,7 @@ def _track_kernel(
     n_seg = frames.shape[0]
     _, grad, band, jac_t, constraint, residual = _state_system(
         frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-        roll_free, end_clamped, largest_stiffness, springs, rest,
+        roll_free, end_clamped, largest_stiffness, springs, rest, braid,
     )
     unstable = -1
     for iteration in range(max_iterations + 1):
@@ -310,7 +317,7 @@ def _track_kernel(
             trial_roll = roll + (alpha * step[3 * n_seg] if roll_free else 0.0)
             _, t_grad, t_band, t_jac_t, t_constraint, trial_residual = _state_system(
                 trial_frames, trial_force, trial_roll, start_point, start_frame, end_point, end_frame, stiffness, h,
-                line_weight, roll_free, end_clamped, largest_stiffness, springs, rest,
+                line_weight, roll_free, end_clamped, largest_stiffness, springs, rest, braid,
             )
             if trial_residual < (1.0 - 1e-4 * alpha) * residual or trial_residual <= tolerance:
                 accepted = True
@@ -326,7 +333,7 @@ def _track_kernel(
 @njit(cache=True)
 def _minimise_kernel(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs, rest,
+    roll_free, end_clamped, largest_stiffness, tolerance, max_iterations, springs, rest, braid,
 ):
     """Levenberg-Marquardt / trust-region Newton that only accepts steps lowering the energy.
 
@@ -340,7 +347,7 @@ def _minimise_kernel(
     n_seg = frames.shape[0]
     energy, grad, band, jac_t, constraint, residual = _state_system(
         frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
-        roll_free, end_clamped, largest_stiffness, springs, rest,
+        roll_free, end_clamped, largest_stiffness, springs, rest, braid,
     )
     diag_scale = 0.0
     for i in range(band.shape[0]):
@@ -371,7 +378,7 @@ def _minimise_kernel(
             trial_roll = roll + (step[3 * n_seg] if roll_free else 0.0)
             t_energy, t_grad, t_band, t_jac_t, t_constraint, trial_residual = _state_system(
                 trial_frames, trial_force, trial_roll, start_point, start_frame, end_point, end_frame, stiffness, h,
-                line_weight, roll_free, end_clamped, largest_stiffness, springs, rest,
+                line_weight, roll_free, end_clamped, largest_stiffness, springs, rest, braid,
             )
             if plain_newton:
                 # close to a stable minimum: plain Newton, judged by the residual

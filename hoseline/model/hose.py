@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hoseline.model.braid import Braid
 from hoseline.model.preset import Preset
 from hoseline.model.stiffeners import Stiffeners
 
@@ -58,6 +59,8 @@ class Hose:
         added to the elastic joints; None (default) for the plain rod.
     preset: the set from storage, a natural curvature (model/preset.py); None (default) for a
         hose that is straight when unloaded.
+    braid: the braid's tension-only strands as a stiffness term (model/braid.py), added to the
+        elastic joints; None (default) for none.
     """
 
     length: float
@@ -70,6 +73,7 @@ class Hose:
     bending_stiffness_2: float | None = None
     stiffeners: Stiffeners | None = None
     preset: Preset | None = None
+    braid: Braid | None = None
 
     def __post_init__(self) -> None:
         for name in ("length", "outer_diameter", "bending_stiffness", "torsional_stiffness"):
@@ -92,6 +96,14 @@ class Hose:
             raise ValueError(f"hose.preset = {self.preset!r}: must be a Preset or None")
         if self.preset is not None and self.stiffeners is not None:
             raise ValueError("hose.preset with hose.stiffeners: the stiffener springs have no preset; give one of them")
+        if self.braid is not None and not isinstance(self.braid, Braid):
+            raise ValueError(f"hose.braid = {self.braid!r}: must be a Braid or None")
+        if self.braid is not None and self.stiffeners is not None:
+            raise ValueError("[hose.braid] with [hose.stiffeners]: both model the braid (the springs discretely); "
+                             "give one of them")
+        if self.braid is not None and self.braid.radius is not None and self.braid.radius > self.outer_radius:
+            raise ValueError(f"hose.braid.radius = {self.braid.radius!r} mm is outside the hose (outer radius "
+                             f"{self.outer_radius:g} mm): give the braid's mean radius, at most the outer radius")
 
     @property
     def outer_radius(self) -> float:

@@ -42,6 +42,13 @@ STIFFNESS_RATIO = (1e-3, 1e3)
 # mass per length: up to 1000 kg/m (the heaviest large-bore suction hoses, filled, are a few hundred)
 MASS_PER_LENGTH_KG_M = 1e3
 
+# braid strands: EA of one strand from a 0.1 mm polyester yarn (about 1e2 N) down to 1e-3, up to a 10 mm steel
+# rope (about 1e7 N); strands per family up to 1000 (a 144-carrier braider with several ends per carrier); a
+# slack strain beyond 1 (100 %) is no play of a braid but a unit mistake (percent for a fraction)
+BRAID_STRAND_STIFFNESS_N = (1e-3, 1e7)
+BRAID_STRANDS = 1000
+BRAID_SLACK_STRAIN = 1.0
+
 # |gravity|: up to 100 m/s^2 (10 g), more than any quasi-static load on a vehicle
 GRAVITY_M_S2 = 100.0
 

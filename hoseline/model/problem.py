@@ -101,8 +101,11 @@ class Problem:
                                  f"{turned:g} in direction): build the problem with model.fittings.fitted_problem")
 
     def _check_clips(self) -> None:
-        """Each clip strictly inside the hose, on a station, after the previous one, and reachable."""
+        """Each clip strictly inside the hose, on a station, after the previous one, and reachable; none on a braided hose."""
         hose = self.hose
+        if self.clips and hose.braid is not None:
+            raise ValueError("[hose.braid] with [[clips]]: a braided hose with clips is not implemented yet (the clipped "
+                             "rod has no braid term); remove the braid or the clips")
         previous_s, previous_point, previous_label = 0.0, self.start.point, "the start mount"
         for index, clip in enumerate(self.clips):
             label = f"clips[{index}]" + (f" ({clip.name})" if clip.name else "")

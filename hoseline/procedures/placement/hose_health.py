@@ -42,7 +42,7 @@ def station_moments(props: RodProperties, clamps: Clamps, state: RodState):
     end_frame = end_frame_of(clamps, state)
     moments, darboux = joint_moments(
         state.frames, clamps.start_frame, end_frame, props.stiffness, props.segment_length, True, props.springs,
-        props.rest,
+        props.rest, props.braid,
     )
     tangents = np.vstack([clamps.start_frame[2][None], state.frames[:, 2], end_frame[2][None]])
     node_tangent = tangents[:-1] + tangents[1:]

@@ -31,6 +31,7 @@ from dataclasses import replace
 import numpy as np
 
 from hoseline.mechanics import clipped_newton
+from hoseline.mechanics.braid import braid_coefficients
 from hoseline.mechanics.clipped_newton import clip_rolls
 from hoseline.mechanics.newton import RodProperties, end_frame_of, solve_equilibrium, total_energy
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
@@ -61,10 +62,19 @@ __all__ = ["solve", "PlacementError", "rod_properties"]
 
 
 def rod_properties(problem: Problem) -> RodProperties:
-    """Internal-unit rod properties of the problem's hose (with its stiffener springs, if any)."""
+    """Internal-unit rod properties of the problem's hose (with its stiffener springs, preset and braid, if any)."""
     hose = problem.hose
     return RodProperties(hose.stiffness_vector, hose.segment_length, int(hose.segments), stiffener_springs(hose),
-                         preset_rest_rotations(hose.preset, int(hose.segments), hose.segment_length))
+                         preset_rest_rotations(hose.preset, int(hose.segments), hose.segment_length), braid_data(hose))
+
+
+def braid_data(hose: Hose) -> np.ndarray | None:
+    """The hose's braid coupling packed for the kernels (mechanics/braid.py), or None without a braid."""
+    braid = hose.braid
+    if braid is None:
+        return None
+    return braid_coefficients(int(braid.strands), braid.strand_axial_stiffness, braid.angle_deg,
+                              braid.layer_radius(hose.outer_radius), braid.slack_strain)
 
 
 def stiffener_springs(hose: Hose) -> tuple | None:

@@ -96,7 +96,7 @@ def build_result(
         elastic_energy=float(
             system.energy - weight_energy if clips
             else elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs,
-                                props.rest)
+                                props.rest, props.braid)
         ),
         gravity_energy=weight_energy,
         stability_margin=margin,

@@ -322,7 +322,8 @@ def _frame_or_identity(hold: ClipHold) -> np.ndarray:
 
 
 def _same_properties(a: RodProperties, b: RodProperties) -> bool:
-    return a.segment_length == b.segment_length and bool(np.array_equal(a.stiffness, b.stiffness))
+    return (a.segment_length == b.segment_length and bool(np.array_equal(a.stiffness, b.stiffness))
+            and (a.braid is None) == (b.braid is None) and (a.braid is None or bool(np.array_equal(a.braid, b.braid))))
 
 
 def _blend(old: RodProperties, new: RodProperties, t: float) -> RodProperties:

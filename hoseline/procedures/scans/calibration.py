@@ -20,7 +20,11 @@ Uncertainty.  Two parts in quadrature: the scatter, s^2 (J^T J)^-1 times the var
 of residuals correlated along the hose (scatter_inflation), and the discretisation, from one
 evaluation with twice the segments (_model_error).  Failures (a parameter at its bound, limits
 missed, a flipped twist sign, a confounding fixed parameter) go to Calibration.warnings.
-Units: mm, N*mm^2, kg/m.
+The braid (braid_stiffness = n EA_s, N, the strand count kept; braid_slack = eps0) is fitted from
+the problem's [hose.braid] (it cannot start from no braid or no slack: both are scaled).  On the
+thesis hose its torsional part and the torsion factor move the hose alike: fitted together, the
+braid is reported as not identified (tests/test_braid_calibration.py).
+Units: mm, N*mm^2, kg/m, N.
 """
 
 from __future__ import annotations
@@ -33,13 +37,14 @@ from scipy.optimize import least_squares
 
 from hoseline.mechanics.newton import end_frame_of, node_positions, solve_equilibrium
 from hoseline.mechanics.rod import RodState
+from hoseline.model.braid import Braid
 from hoseline.model.hose import DEFAULT_POISSON_RATIO, Hose, isotropic_torsional_stiffness
 from hoseline.model.preset import Preset
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.scans.deviation import Deviation, Thresholds, closest_on_polyline, deviation
 from hoseline.procedures.placement.sequence import PlacementPath, rod_properties, solve
-from hoseline.procedures.scans.parameters import PARAMETERS
+from hoseline.procedures.scans.parameters import BRAID_PARAMETERS, PARAMETERS
 
 UNIDENTIFIABLE_RELATIVE_STD = 0.25
 UNIDENTIFIABLE_ANGLE_STD_DEG = 15.0  # a preset angle less certain than this is not identified
@@ -123,7 +128,17 @@ def hose_with(base: Hose, values: dict[str, float], poisson_ratio: float = DEFAU
         mass_per_length=values.get("mass_per_length", base.mass_per_length),
         length=values.get("length", base.length),
         preset=_preset_with(base, values),
+        braid=_braid_with(base, values),
     )
+
+
+def _braid_with(base: Hose, values: dict[str, float]) -> Braid | None:
+    """The base hose's braid with braid_stiffness (n EA_s, N; the strand count kept) and braid_slack (eps0)."""
+    if base.braid is None:
+        return None
+    stiffness = values.get("braid_stiffness", base.braid.stiffness)
+    return replace(base.braid, strand_axial_stiffness=stiffness / base.braid.strands,
+                   slack_strain=values.get("braid_slack", base.braid.slack_strain))
 
 
 def _preset_with(base: Hose, values: dict[str, float]) -> Preset | None:
@@ -142,6 +157,9 @@ def current_value(hose: Hose, name: str, poisson_ratio: float = DEFAULT_POISSON_
     if name in ("preset_curvature", "preset_angle"):
         preset = hose.preset or Preset(0.0)
         return preset.curvature if name == "preset_curvature" else preset.angle_deg
+    if name in BRAID_PARAMETERS:  # 0 without a braid
+        braid = hose.braid
+        return 0.0 if braid is None else braid.stiffness if name == "braid_stiffness" else braid.slack_strain
     return float(getattr(hose, name))
 
 
@@ -203,6 +221,12 @@ def identifiable_parameters(problem: Problem, fit: list[str]) -> tuple[list[str]
     if unknown:
         raise ValueError(f"cannot fit {', '.join(unknown)}: choose from {', '.join(PARAMETERS)}")
     kept, notes = list(dict.fromkeys(fit)), []
+    braid = problem.hose.braid
+    for name in (name for name in kept if name in BRAID_PARAMETERS):
+        if braid is None or current_value(problem.hose, name) == 0.0:
+            what = "[hose.braid]" if braid is None else "hose.braid.slack_strain > 0"
+            raise ValueError(f"cannot fit {name}: give {what} in the problem file to start from (the fit scales the "
+                             "initial value: it cannot start from zero)")
     weightless = problem.hose.mass_per_length == 0.0 or not np.any(problem.gravity)
     if weightless:
         for name in ("bending_stiffness", "mass_per_length"):
@@ -449,7 +473,9 @@ class _FixedEffect:
 
 _LOOKS = {"mass_per_length": ("heavier", "lighter"), "length": ("longer", "shorter"),
           "bending_stiffness": ("stiffer in bending", "softer in bending"),
-          "torsion_factor": ("stiffer in torsion", "softer in torsion")}
+          "torsion_factor": ("stiffer in torsion", "softer in torsion"),
+          "braid_stiffness": ("to have a stiffer braid", "to have a softer braid"),
+          "braid_slack": ("to have a slacker braid", "to have a tighter braid")}
 
 
 def _fixed_parameter_effects(fitter: _Fitter, solution, total_std: np.ndarray,
