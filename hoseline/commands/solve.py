@@ -90,11 +90,7 @@ def solve_command(
 
 def accuracy_mm(text: str) -> float:
     """The --accuracy value in mm ("0.01mm" or "0.01"), or exit 2 saying what to give."""
-    number = text.strip().lower().removesuffix("mm").strip()
-    try:
-        value = float(number)
-    except ValueError:
-        value = math.nan
+    value = _number(text, "mm")
     if not (math.isfinite(value) and value > 0.0):
         raise fail(f"--accuracy {text!r}: give a positive length in mm, e.g. 0.01mm", BAD_INPUT)
     return value
@@ -104,15 +100,19 @@ def twist_deg(text: str) -> float:
     """The --hysteresis value in degrees ("720deg" or "720"), or exit 2 saying what to give."""
     from hoseline.model import limits
 
-    number = text.strip().lower().removesuffix("deg").strip()
-    try:
-        value = float(number)
-    except ValueError:
-        value = math.nan
+    value = _number(text, "deg")
     if not (math.isfinite(value) and value != 0.0 and abs(value) <= limits.ANGLE_DEG):
         raise fail(f"--hysteresis {text!r}: give the largest twist in degrees, not zero and within "
                    f"+-{limits.ANGLE_DEG:g}, e.g. 720", BAD_INPUT)
     return value
+
+
+def _number(text: str, unit: str) -> float:
+    """The number of an option's text, with or without its unit ("0.01mm"), NaN when it is none."""
+    try:
+        return float(text.strip().lower().removesuffix(unit).strip())
+    except ValueError:
+        return math.nan
 
 
 def hysteresis_step(largest_twist_deg: float) -> float:

@@ -457,7 +457,8 @@ class HoseSection(_Section):
         return self
 
     def _stiffnesses_in_range(self) -> None:
-        """Refuse an EI computed from youngs_modulus outside the stiffness range, and lopsided stiffness ratios."""
+        """Refuse an EI no solid rod of the outer diameter could have (a unit mistake), an EI computed from
+        youngs_modulus outside the stiffness range, and lopsided stiffness ratios."""
         bending, torsional = self.stiffnesses()
         if self.bending_stiffness is not None:
             modulus = bending / (math.pi * self.outer_diameter**4 / 64.0)
