@@ -2,7 +2,8 @@
 
 The solver keeps the hose out of the exact analytic shapes; the studio and the sweep report need
 triangles to draw, and the studio's clearance readouts and colour map measure to the same
-triangles (required clearance 0: the hose may touch them).  Spheres and capsules are tessellated finely enough that the facets lie
+triangles (required clearance 0: the hose may touch them).  Boxes and meshes are triangles already
+(the solver's own surface, exact).  Spheres and capsules are tessellated finely enough that the facets lie
 within 0.5 % of the radius of the true surface (inside it: a tessellation's vertices are on the
 surface, its faces inside), so the drawn clearance of a touching hose reads a little over zero,
 never under.  A plane is drawn as a square about the hose's mounts, `PLANE_EXTENT` hose lengths
@@ -54,6 +55,10 @@ def _mesh(obstacle: Obstacle, centre: np.ndarray, extent: float) -> MeshObstacle
         rotation[:3, 3] = 0.5 * (obstacle.start + obstacle.end)
         mesh.apply_transform(rotation)
         vertices, faces = mesh.vertices, mesh.faces
+    elif getattr(obstacle, "kind", None) == "box":  # the box's own triangles: the solver's exact surface
+        vertices, faces = obstacle.triangles()
+    elif getattr(obstacle, "kind", None) == "mesh":
+        vertices, faces = obstacle.vertices, obstacle.faces
     else:
         raise TypeError(f"contact obstacle {obstacle.name!r}: {type(obstacle).__name__} cannot be drawn")
     return MeshObstacle(obstacle.name, np.asarray(vertices, dtype=float), np.asarray(faces, dtype=np.int64),
