@@ -1,7 +1,8 @@
 """The nominal placement as two equilibria, the clamps of a perturbed hose, and Newton from the nominal hose.
 
 The published placement ends in two equilibria: at the end of the place phase (end fitting free
-to roll: the roll found is the lock angle) and, after the lock and the twist, the final one.  A
+to roll: the roll found is the lock angle; every framed clip free to roll too) and, after the lock
+(of the end and of fixed clips) and the twist, the final one.  A
 perturbed hose (tolerances.perturbed) has its own clamps for both (PerturbedPlacement); its
 start fitting's frame is the nominal one turned by the tilt of the start direction, so that it
 changes smoothly with the deviation (a placement picks the frame by a convention from the

@@ -17,6 +17,9 @@ The placement is two equilibria in a row: at the end of the place phase the end 
 to roll and the roll found (the lock angle) is then clamped and twisted.  A tolerance moves the
 lock angle too, so the first equilibrium is differentiated first (its unknowns include the roll),
 and the roll's derivative enters the final clamps: end frame = locked(p) turned by the twist.
+Clips the same way: in the place phase every framed clip is free to roll too; a fixed clip is then
+locked at its roll, whose derivative enters its frame in the final clamps, while a rotating clip's
+roll stays an unknown (the bordered system then has three rows more per clip, mechanics/bordered.py).
 
 The quantities are then differentiated by the chain rule along the tangent of the equilibrium
 path, evaluated as a central difference of the readings at x +- eps dx/dp, p +- eps (the minimum
@@ -145,13 +148,9 @@ def perturbed_finals(problem: Problem, free_clamps: Clamps, free_system, free_st
     sides = (PerturbedPlacement(problem, eps), PerturbedPlacement(problem, -eps))
     free = [evaluate(side.props, side.free(), free_state) for side in sides]
     roll_step, clip_roll_step = _roll_tangent(free_clamps, len(free_state.frames), free_system, free, step)
-    rolls = [rolled(free_state.roll + sign * step * roll_step, _clip_rolls(free_state) + sign * step * clip_roll_step)
+    rolls = [rolled(free_state.roll + sign * step * roll_step, free_state.clip_rolls + sign * step * clip_roll_step)
              for sign in (1.0, -1.0)]
     return sides, [side.final(r) for side, r in zip(sides, rolls)]
-
-
-def _clip_rolls(state) -> np.ndarray:
-    return state.clip_rolls if state.clip_rolls.size else np.zeros(0)
 
 
 def _roll_tangent(free_clamps: Clamps, segments: int, free_system, sides, step: float) -> tuple[float, np.ndarray]:
