@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 import scipy.linalg
-from threadpoolctl import threadpool_limits
 
+from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.banded import NEUTRAL
 from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_PLANE, node_terms
 from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact, penetration_message
@@ -128,7 +128,7 @@ def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: R
     (N/rad^2, as Result.stability_margin); zero (neutral) when it is within NEUTRAL of the largest magnitude
     (rounding: the barrier's curvature makes that largest eigenvalue big)."""
     system = evaluate_contact(props, clamps, state, model)
-    with threadpool_limits(limits=1, user_api="blas"):  # small dense matrices: threads only contend (4x slower)
+    with one_blas_thread():  # small dense matrices: threads only contend (4x slower)
         basis = scipy.linalg.null_space(np.asarray(system.jac_t).T)
         values = scipy.linalg.eigvalsh(basis.T @ system.dense() @ basis)
     if abs(values[0]) <= NEUTRAL * float(np.max(np.abs(values))):

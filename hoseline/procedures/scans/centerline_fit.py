@@ -41,8 +41,8 @@ import numpy as np
 from scipy.interpolate import make_smoothing_spline
 from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 from scipy.spatial import cKDTree, distance_matrix
-from threadpoolctl import threadpool_limits
 
+from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.procedures.scans.cylinder_fit import fit_cylinder
 from hoseline.procedures.scans.deviation import closest_on_polyline
 from hoseline.procedures.scans.voxel_cloud import VoxelCloud, voxel_cloud
@@ -266,7 +266,7 @@ def _fit_sections(cloud: VoxelCloud, guide: np.ndarray, radius: float, section: 
     fits = []
     # The fits are small dense problems: OpenBLAS threads only add waiting (a 4000 x 7 SVD took
     # 62 ms with its threads on this 2-core machine under load, 0.7 ms with one).
-    with threadpool_limits(1, user_api="blas"):
+    with one_blas_thread():
         for index, (centre, tangent) in enumerate(zip(guide, tangents)):
             if any(low <= guide_s[index] <= high for low, high in gaps):
                 continue

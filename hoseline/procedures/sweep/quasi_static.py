@@ -30,8 +30,8 @@ import time
 from dataclasses import dataclass, replace
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.clipped_newton import clip_arc_lengths, clip_reactions, station_positions
 from hoseline.mechanics.newton import node_positions, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
@@ -190,7 +190,7 @@ def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None,
         SweepResult keeps no frames; the variation study's sensitivities differentiate these).
     Raises PlacementError (from the placement or the continuation) when a pose cannot be reached.
     """
-    with threadpool_limits(limits=1, user_api="blas"):  # many small dense solves: BLAS threads only contend
+    with one_blas_thread():  # many small dense solves: BLAS threads only contend
         return _run_sweep(sweep, progress, equilibria)
 
 
