@@ -324,11 +324,19 @@ class Session:
         return tables
 
     def _validated(self, data: dict) -> Problem:
-        """The problem of a problem-file dict, checked as a file is (StudioError with the file's message)."""
+        """The problem of a problem-file dict, checked as a file is (StudioError with the file's message).
+
+        The page never changes the contact obstacles: they are taken over from the problem shown, not
+        read again (a mesh obstacle's file would be read at every drag), and checked with the rest.
+        """
+        edited = {key: value for key, value in data.items() if key != "contact"}
         try:
-            return problem_from_dict(data, source="studio")
+            problem = problem_from_dict(edited, source="studio")
+            return replace(problem, contact=self.problem.contact, self_contact=self.problem.self_contact)
         except ProblemFileError as exc:
             raise StudioError(str(exc).removeprefix("studio: ")) from None
+        except ValueError as exc:  # the Problem's own checks of contact with the rest (model/problem.py)
+            raise StudioError(str(exc)) from None
 
 
 def _shown(obstacles: list[Obstacle]) -> list[ShownObstacle]:
