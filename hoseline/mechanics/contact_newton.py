@@ -34,16 +34,18 @@ from hoseline.mechanics.banded import NEUTRAL, band_to_dense, banded_matvec
 from hoseline.mechanics.clipped import unknown_layout
 from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
 from hoseline.mechanics.contact import (
+    MESH_KINDS,
     PAIR_KINDS,
     SEGMENT_BALL,
     SEGMENT_CAPSULE,
     SEGMENT_SEGMENT,
-    STATION_PLANE,
+    STATION_KINDS,
     listed_gaps,
     node_terms,
     pair_gaps,
     rotation_terms,
 )
+from hoseline.mechanics.contact_mesh import MeshArrays
 from hoseline.mechanics.contact_solve import (
     banded_step,
     dense_step,
@@ -76,6 +78,7 @@ class ContactModel:
     push).  stiffness: barrier stiffness kappa, N/mm^2 (see docs/model.md, Contact).
     planes (P, 6): point, unit normal.  balls (S, 4): centre, radius.  capsules (C, 7): axis
     start, axis end, radius.  owners_*: index into `names` of each primitive's obstacle.
+    mesh: the triangle meshes and boxes (contact_mesh.MeshArrays, with their owners).
     self_exclusion: segments i < j can touch when j - i > self_exclusion; -1: no self-contact.
     """
 
@@ -88,19 +91,61 @@ class ContactModel:
     owners_planes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     owners_balls: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     owners_capsules: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    mesh: MeshArrays = field(default_factory=MeshArrays)
     names: tuple[str, ...] = ()
     self_exclusion: int = -1
 
-    def pairs(self, nodes: np.ndarray, cutoff: float):
-        """(kinds, first, second, gaps) of every pair with a gap below `cutoff` mm (contact.pair_gaps)."""
-        return pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, self.self_exclusion, cutoff)
+    def pairs(self, nodes: np.ndarray, cutoff: float, *, meshes: bool = True):
+        """(kinds, first, second, gaps) of every pair with a gap below `cutoff` mm (contact.pair_gaps); the mesh pairs
+        (contact_mesh.mesh_pairs) only below the smaller of `cutoff` and d_hat (the barrier's: a mesh has too many
+        to list them all), none without `meshes`."""
+        found = pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, self.self_exclusion, cutoff)
+        if not meshes or self.mesh.count == 0:
+            return found
+        on_meshes = self.mesh.pairs(nodes, self.hose_radius, min(cutoff, self.activation))
+        return tuple(np.concatenate([a, b]) for a, b in zip(found, on_meshes))
+
+    def terms(self, nodes: np.ndarray, weight: float, kinds, first, second):
+        """contact.node_terms of the pairs (kinds, first, second) with this model's obstacles; weight: kappa h, N/mm."""
+        return node_terms(nodes, self.hose_radius, weight, self.activation, self.planes, self.balls, self.capsules,
+                          self.mesh.triangles, self.mesh.edges, kinds, first, second)
 
     def owner(self, kind: int, second: int) -> str:
         """Name of the obstacle of a pair ("self" for self-contact)."""
         if kind == SEGMENT_SEGMENT:
             return "self"
+        if kind in MESH_KINDS:
+            return self.names[self.mesh.owner(kind, second)]
         owners = (self.owners_planes, self.owners_balls, self.owners_capsules)[kind]
         return self.names[int(owners[second])]
+
+    def penetration(self, nodes: np.ndarray) -> str | None:
+        """What the hose with centreline `nodes` (mm) is inside or touching, where and by how much; None if it clears all."""
+        kinds, first, second, gaps = self.pairs(nodes, 0.0, meshes=False)
+        if kinds.size:
+            worst = int(np.argmin(gaps))
+            return penetration_message(self, kinds[worst], first[worst], second[worst], gaps[worst])
+        if self.mesh.count:
+            mesh_gaps, nearest = self.mesh.segment_gaps(nodes, self.hose_radius, 0.0)
+            if np.any(nearest >= 0):
+                mesh, segment = np.unravel_index(int(np.argmin(mesh_gaps)), mesh_gaps.shape)
+                return (f"the hose is inside obstacle {self.names[int(self.mesh.owners[mesh])]!r} at segment {segment} "
+                        f"by {-mesh_gaps[mesh, segment]:.4g} mm (segment-triangle)")
+        return None
+
+    def smallest_gaps(self, nodes: np.ndarray) -> dict[str, float]:
+        """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to each obstacle (and "self")."""
+        smallest = {name: math.inf for name in self.names} | ({"self": math.inf} if self.self_exclusion >= 0 else {})
+        kinds, _, second, gaps = self.pairs(nodes, math.inf, meshes=False)
+        for kind, j, gap in zip(kinds, second, gaps):
+            name = self.owner(kind, j)
+            smallest[name] = min(smallest[name], float(gap))
+        if self.mesh.count:
+            mesh_gaps = self.mesh.segment_gaps(nodes, self.hose_radius, math.inf)[0]
+            for mesh in range(self.mesh.count):
+                name = self.names[int(self.mesh.owners[mesh])]
+                smallest[name] = min(smallest[name], float(np.min(mesh_gaps[mesh])))
+        return smallest
 
 
 def self_exclusion(hose_radius: float, segment_length: float) -> int:
@@ -158,9 +203,7 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
     nodes = centerline(state.frames, clamps.start_point, h)
     kinds, first, second, _ = model.pairs(nodes, model.activation)
     weight = model.stiffness * h
-    energy, node_grad, node_hess, forces, on_hose, on_other, gaps = node_terms(
-        nodes, model.hose_radius, weight, model.activation, model.planes, model.balls, model.capsules, kinds, first, second
-    )
+    energy, node_grad, node_hess, forces, on_hose, on_other, gaps = model.terms(nodes, weight, kinds, first, second)
     grad = base.grad.copy()
     band = base.band.copy()
     columns, signs, index = np.zeros((grad.size, 0)), np.zeros(0), None
@@ -209,7 +252,9 @@ class StepFilter:
     (gap + thickness) / move bound, the thickness being the other body's diameter (infinite for a
     plane).  A trial state is accepted only if every watched gap stays above SAFE_FRACTION of its
     value (`admits`); as a primitive cannot cross a body without ending inside it or passing
-    through it, no accepted step crosses into penetration.
+    through it, no accepted step crosses into penetration.  Meshes (thin surfaces) are not watched
+    but limit the step by conservative advancement (contact_mesh.py): no point of the hose may
+    travel farther than (1 - SAFE_FRACTION) of its gap to a mesh.
     """
 
     pairs: tuple
@@ -222,7 +267,8 @@ class StepFilter:
             return True
         nodes = centerline(trial.frames, clamps.start_point, props.segment_length)
         kinds, first, second = self.pairs
-        gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, kinds, first, second)
+        gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, model.mesh.triangles,
+                           model.mesh.edges, kinds, first, second)
         return bool(np.all(gaps > SAFE_FRACTION * self.gaps))
 
 
@@ -233,11 +279,16 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
     rotations = step[index[:, None] + np.arange(3)[None, :]]
     reach = np.concatenate([[0.0], h * np.cumsum(np.linalg.norm(rotations, axis=1))])  # bound of station k's move
     nodes = centerline(state.frames, clamps.start_point, h)
-    kinds, first, second, gaps = model.pairs(nodes, float(reach[-1]) + model.activation)
+    limit = 1.0
+    if model.mesh.count and reach[-1] > 0.0:  # conservative advancement (contact_mesh.py)
+        mesh_gaps = np.min(model.mesh.segment_gaps(nodes, model.hose_radius, float(reach[-1]))[0], axis=0)
+        with np.errstate(divide="ignore"):
+            limit = float(min(1.0, np.min((1.0 - SAFE_FRACTION) * mesh_gaps / reach[1:])))
+    kinds, first, second, gaps = model.pairs(nodes, float(reach[-1]) + model.activation, meshes=False)
     if kinds.size == 0:
-        return StepFilter((kinds, first, second), gaps, 1.0)
+        return StepFilter((kinds, first, second), gaps, limit)
     last = props.segments
-    bound = np.where(kinds == STATION_PLANE, reach[first], reach[np.minimum(first + 1, last)])
+    bound = np.where(np.isin(kinds, STATION_KINDS), reach[first], reach[np.minimum(first + 1, last)])
     bound = bound + np.where(kinds == SEGMENT_SEGMENT, reach[np.minimum(second + 1, last)], 0.0)
     thickness = np.full(kinds.size, np.inf)
     thickness[kinds == SEGMENT_SEGMENT] = 2.0 * model.hose_radius
@@ -246,7 +297,7 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
     thickness[capsules] = 2.0 * model.capsules[second[capsules], 6]
     with np.errstate(divide="ignore", invalid="ignore"):
         fractions = np.where(bound > 0.0, (gaps + thickness) / bound, np.inf)
-    return StepFilter((kinds, first, second), gaps, float(min(1.0, np.min(fractions))))
+    return StepFilter((kinds, first, second), gaps, float(min(limit, np.min(fractions))))
 
 
 def solve_with_contact(
@@ -273,12 +324,9 @@ def solve_with_contact(
 
 def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
     """solve_with_contact without the thread limit."""
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    kinds, first, second, gaps = model.pairs(nodes, 0.0)
-    if kinds.size:
-        worst = int(np.argmin(gaps))
-        return state, NewtonReport(False, 0, math.inf, -1, penetration_message(model, kinds[worst], first[worst],
-                                                                                second[worst], gaps[worst]))
+    inside = model.penetration(centerline(state.frames, clamps.start_point, props.segment_length))
+    if inside is not None:
+        return state, NewtonReport(False, 0, math.inf, -1, inside)
     system = evaluate_contact(props, clamps, state, model)
     unstable = -1
     for iteration in range(max_iterations + 1):
@@ -408,12 +456,9 @@ def _onto_constraints(props: RodProperties, clamps: Clamps, state: RodState, cor
 
 def _minimise_with_contact(props, clamps, state, model, tolerance, max_iterations):
     """minimise_with_contact without the thread limit (the loop of newton._minimise_kernel, with the step filter)."""
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    kinds, first, second, gaps = model.pairs(nodes, 0.0)
-    if kinds.size:
-        worst = int(np.argmin(gaps))
-        return state, NewtonReport(False, 0, math.inf, -1, penetration_message(model, kinds[worst], first[worst],
-                                                                                second[worst], gaps[worst]))
+    inside = model.penetration(centerline(state.frames, clamps.start_point, props.segment_length))
+    if inside is not None:
+        return state, NewtonReport(False, 0, math.inf, -1, inside)
     system = evaluate_contact(props, clamps, state, model)
     diag_scale = float(np.max(np.abs(system.band[:, 0])))
     sigma_floor = 1e-10 * diag_scale
@@ -486,7 +531,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
 
 def penetration_message(model: ContactModel, kind: int, first: int, second: int, gap: float) -> str:
     """Which obstacle the hose is inside, where (station or segment) and by how much."""
-    where = f"station {first}" if kind == STATION_PLANE else f"segment {first}"
+    where = f"station {first}" if kind in STATION_KINDS else f"segment {first}"
     if kind == SEGMENT_SEGMENT:
         return f"the hose cuts into itself: segments {first} and {second} overlap by {-gap:.4g} mm"
     return f"the hose is inside obstacle {model.owner(kind, second)!r} at {where} by {-gap:.4g} mm ({PAIR_KINDS[kind]})"
@@ -495,5 +540,4 @@ def penetration_message(model: ContactModel, kind: int, first: int, second: int,
 def minimum_gap(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:
     """The smallest gap (mm, surface to surface) over every pair: the hose's clearance to all it may touch."""
     nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    _, _, _, gaps = model.pairs(nodes, math.inf)
-    return float(np.min(gaps)) if gaps.size else math.inf
+    return min(model.smallest_gaps(nodes).values(), default=math.inf)

@@ -1,10 +1,11 @@
 """Exact distances between the hose and its surroundings.
 
-proximity.py holds the compiled segment-triangle and segment-plane distance kernels;
-clearance.py the bounding-volume hierarchy that finds the nearest triangle of an obstacle
-mesh for every segment.  Used by sweeps now, and by contact.
+clearance.py finds the nearest triangle of an obstacle mesh for every segment with the
+bounding-volume hierarchy of mechanics/bounding_volumes.py and the segment-triangle distance
+of mechanics/proximity.py (there, not here, because contact with meshes uses them too);
+clearance_profile.py the clearance along the hose.  Used by sweeps.
 
-May import: numpy, numba only (no model, no mechanics): pure geometry in mm.
+May import: numpy, numba and those two geometric kernels of mechanics: pure geometry in mm.
 """
 
 from hoseline import compilation
