@@ -93,10 +93,12 @@ class MeshArrays:
         return mesh_pairs(nodes, hose_radius, cutoff, self.triangles, *self.triangle_tree, self.triangle_roots,
                           self.edges, *self.edge_tree, self.edge_roots)
 
-    def segment_gaps(self, nodes: np.ndarray, hose_radius: float, bound: float) -> tuple[np.ndarray, np.ndarray]:
-        """(gaps (K, N) mm, triangles (K, N)): each segment's exact gap to each mesh (negative inside, -r crossing a
-        triangle) and its nearest triangle; `bound` and -1 where the mesh is farther than `bound` mm."""
-        return segment_gaps(nodes, hose_radius, bound, self.triangles, self.normals, *self.triangle_tree,
+    def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
+                     bound: float) -> tuple[np.ndarray, np.ndarray]:
+        """(gaps (K, n) mm, triangles (K, n)): the exact gap of each capsule of `hose_radius` about the segments from
+        `starts` to `ends` ((n, 3) mm) to each mesh (negative inside, -r crossing a triangle) and its nearest
+        triangle; `bound` and -1 where the mesh is farther than `bound` mm."""
+        return segment_gaps(starts, ends, hose_radius, bound, self.triangles, self.normals, *self.triangle_tree,
                             self.triangle_roots)
 
 
@@ -226,19 +228,20 @@ def mesh_pairs(nodes, hose_radius, cutoff, triangles, t_lower, t_upper, t_childr
 
 
 @njit(cache=True)
-def segment_gaps(nodes, hose_radius, bound, triangles, normals, lower, upper, children, ranges, roots):
-    """Each segment's exact gap (mm) to each mesh and the nearest triangle, (K, N) each; `bound` and -1 beyond it.
+def segment_gaps(starts, ends, hose_radius, bound, triangles, normals, lower, upper, children, ranges, roots):
+    """The exact gap (mm) of each segment starts[i] to ends[i] to each mesh and the nearest triangle, (K, n) each;
+    `bound` and -1 beyond it.
 
     The segment-triangle distance (mechanics/proximity.py, zero where the segment crosses a triangle)
     less the hose radius, by branch and bound over each mesh's tree.
     """
-    n_seg = nodes.shape[0] - 1
+    n_seg = starts.shape[0]
     gaps = np.full((roots.shape[0], n_seg), bound)
     nearest = -np.ones((roots.shape[0], n_seg), np.int64)
     stack = np.empty(STACK_SIZE, np.int64)
     for m in range(roots.shape[0]):
         for i in range(n_seg):
-            d, position, _, _ = segment_search(point_of(nodes, i), point_of(nodes, i + 1), bound + hose_radius,
+            d, position, _, _ = segment_search(point_of(starts, i), point_of(ends, i), bound + hose_radius,
                                                triangles, normals, lower, upper, children, ranges, roots[m], stack)
             if position >= 0:
                 gaps[m, i] = d - hose_radius

@@ -38,6 +38,7 @@ from hoseline.mechanics.contact import (
     PAIR_KINDS,
     SEGMENT_BALL,
     SEGMENT_CAPSULE,
+    SEGMENT_EDGE,
     SEGMENT_SEGMENT,
     STATION_KINDS,
     listed_gaps,
@@ -126,7 +127,7 @@ class ContactModel:
             worst = int(np.argmin(gaps))
             return penetration_message(self, kinds[worst], first[worst], second[worst], gaps[worst])
         if self.mesh.count:
-            mesh_gaps, nearest = self.mesh.segment_gaps(nodes, self.hose_radius, 0.0)
+            mesh_gaps, nearest = self.mesh.segment_gaps(nodes[:-1], nodes[1:], self.hose_radius, 0.0)
             if np.any(nearest >= 0):
                 mesh, segment = np.unravel_index(int(np.argmin(mesh_gaps)), mesh_gaps.shape)
                 return (f"the hose is inside obstacle {self.names[int(self.mesh.owners[mesh])]!r} at segment {segment} "
@@ -141,7 +142,7 @@ class ContactModel:
             name = self.owner(kind, j)
             smallest[name] = min(smallest[name], float(gap))
         if self.mesh.count:
-            mesh_gaps = self.mesh.segment_gaps(nodes, self.hose_radius, math.inf)[0]
+            mesh_gaps = self.mesh.segment_gaps(nodes[:-1], nodes[1:], self.hose_radius, math.inf)[0]
             for mesh in range(self.mesh.count):
                 name = self.names[int(self.mesh.owners[mesh])]
                 smallest[name] = min(smallest[name], float(np.min(mesh_gaps[mesh])))
@@ -252,41 +253,62 @@ class StepFilter:
     (gap + thickness) / move bound, the thickness being the other body's diameter (infinite for a
     plane).  A trial state is accepted only if every watched gap stays above SAFE_FRACTION of its
     value (`admits`); as a primitive cannot cross a body without ending inside it or passing
-    through it, no accepted step crosses into penetration.  Meshes (thin surfaces) are not watched
-    but limit the step by conservative advancement (contact_mesh.py): no point of the hose may
-    travel farther than (1 - SAFE_FRACTION) of its gap to a mesh.
+    through it, no accepted step crosses into penetration.
+    Meshes are surfaces, not bodies (contact_mesh.py, step filter): a segment-edge pair's fraction is
+    kept below (1 - SAFE_FRACTION) gap / move bound (conservative advancement), and a station's whole
+    path must clear the meshes: chords: (the stations now (N+1, 3) mm, their gaps to the meshes
+    (N+1,) mm, inf where out of reach, and the bound (N+1,) mm of the path's distance from its chord
+    for the whole step), or None without meshes.
     """
 
     pairs: tuple
     gaps: np.ndarray
     limit: float
+    chords: tuple | None = None
 
-    def admits(self, props: RodProperties, clamps: Clamps, trial: RodState, model: ContactModel) -> bool:
-        """Whether the trial state keeps every watched gap above SAFE_FRACTION of its value."""
+    def admits(self, props: RodProperties, clamps: Clamps, trial: RodState, model: ContactModel, alpha: float) -> bool:
+        """Whether the trial state, `alpha` times the step, keeps every watched gap above SAFE_FRACTION of its value."""
+        nodes = centerline(trial.frames, clamps.start_point, props.segment_length)
+        if self.chords is not None and not self._paths_clear(nodes, model, alpha):
+            return False
         if self.gaps.size == 0:
             return True
-        nodes = centerline(trial.frames, clamps.start_point, props.segment_length)
         kinds, first, second = self.pairs
         gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, model.mesh.triangles,
                            model.mesh.edges, kinds, first, second)
         return bool(np.all(gaps > SAFE_FRACTION * self.gaps))
+
+    def _paths_clear(self, nodes: np.ndarray, model: ContactModel, alpha: float) -> bool:
+        """Whether every station near a mesh stays clear of it along its path, by SAFE_FRACTION of its gap now.
+
+        The path of station k lies within alpha^2 bend_k of its chord (contact_mesh.py), so its gap along the
+        step is at least the chord's gap less that."""
+        start, gaps, bend = self.chords
+        near = np.isfinite(gaps)
+        chord_gaps = np.min(model.mesh.segment_gaps(start[near], nodes[near], model.hose_radius, math.inf)[0], axis=0)
+        return bool(np.all(chord_gaps - alpha * alpha * bend[near] > SAFE_FRACTION * gaps[near]))
 
 
 def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, model: ContactModel) -> StepFilter:
     """The StepFilter of `step` from `state` (see StepFilter)."""
     h = props.segment_length
     index = rotation_index(props, clamps, state)
-    rotations = step[index[:, None] + np.arange(3)[None, :]]
-    reach = np.concatenate([[0.0], h * np.cumsum(np.linalg.norm(rotations, axis=1))])  # bound of station k's move
+    turns = np.linalg.norm(step[index[:, None] + np.arange(3)[None, :]], axis=1)
+    reach = np.concatenate([[0.0], h * np.cumsum(turns)])  # bound of station k's move
     nodes = centerline(state.frames, clamps.start_point, h)
-    limit = 1.0
-    if model.mesh.count and reach[-1] > 0.0:  # conservative advancement (contact_mesh.py)
-        mesh_gaps = np.min(model.mesh.segment_gaps(nodes, model.hose_radius, float(reach[-1]))[0], axis=0)
-        with np.errstate(divide="ignore"):
-            limit = float(min(1.0, np.min((1.0 - SAFE_FRACTION) * mesh_gaps / reach[1:])))
-    kinds, first, second, gaps = model.pairs(nodes, float(reach[-1]) + model.activation, meshes=False)
+    cutoff = float(reach[-1]) + model.activation
+    kinds, first, second, gaps = model.pairs(nodes, cutoff, meshes=False)
+    chords = None
+    if model.mesh.count:
+        on_edges = model.mesh.pairs(nodes, model.hose_radius, cutoff)
+        edges = on_edges[0] == SEGMENT_EDGE
+        kinds, first, second, gaps = (np.concatenate([a, b[edges]]) for a, b in zip((kinds, first, second, gaps), on_edges))
+        station_gaps = np.min(model.mesh.segment_gaps(nodes, nodes, model.hose_radius, cutoff)[0], axis=0)
+        station_gaps[station_gaps >= cutoff] = math.inf  # out of reach
+        bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
+        chords = (nodes, station_gaps, bend)
     if kinds.size == 0:
-        return StepFilter((kinds, first, second), gaps, limit)
+        return StepFilter((kinds, first, second), gaps, 1.0, chords)
     last = props.segments
     bound = np.where(np.isin(kinds, STATION_KINDS), reach[first], reach[np.minimum(first + 1, last)])
     bound = bound + np.where(kinds == SEGMENT_SEGMENT, reach[np.minimum(second + 1, last)], 0.0)
@@ -295,9 +317,10 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
     balls, capsules = kinds == SEGMENT_BALL, kinds == SEGMENT_CAPSULE
     thickness[balls] = 2.0 * model.balls[second[balls], 3]
     thickness[capsules] = 2.0 * model.capsules[second[capsules], 6]
+    thickness[kinds == SEGMENT_EDGE] = -SAFE_FRACTION * gaps[kinds == SEGMENT_EDGE]  # a mesh edge has none
     with np.errstate(divide="ignore", invalid="ignore"):
         fractions = np.where(bound > 0.0, (gaps + thickness) / bound, np.inf)
-    return StepFilter((kinds, first, second), gaps, float(min(limit, np.min(fractions))))
+    return StepFilter((kinds, first, second), gaps, float(min(1.0, np.min(fractions))), chords)
 
 
 def solve_with_contact(
@@ -344,7 +367,7 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
         accepted = None
         for _ in range(30):
             trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
-            if not watch.admits(props, clamps, trial, model):
+            if not watch.admits(props, clamps, trial, model, alpha):
                 alpha *= 0.5
                 continue
             trial_system = evaluate_contact(props, clamps, trial, model)
@@ -429,7 +452,7 @@ def _leave_saddle(props, clamps, state, system, model, turns=(0.05, 0.2, 0.8)):
             watch = step_filter(props, clamps, state, step, model)
             alpha = watch.limit
             trial = _onto_constraints(props, clamps, apply_step(props, clamps, state, alpha * step, np.zeros(3)))
-            while not watch.admits(props, clamps, trial, model):
+            while not watch.admits(props, clamps, trial, model, alpha):
                 alpha *= 0.5
                 trial = _onto_constraints(props, clamps, apply_step(props, clamps, state, alpha * step, np.zeros(3)))
             trial_system = evaluate_contact(props, clamps, trial, model)
@@ -494,7 +517,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
             watch = step_filter(props, clamps, state, step, model)
             alpha = watch.limit
             trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
-            while not watch.admits(props, clamps, trial, model) and alpha > 1e-9:
+            while not watch.admits(props, clamps, trial, model, alpha) and alpha > 1e-9:
                 alpha *= 0.5
                 trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
             trial_system = evaluate_contact(props, clamps, trial, model)
