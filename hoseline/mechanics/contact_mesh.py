@@ -214,10 +214,7 @@ def mesh_pairs(nodes, hose_radius, cutoff, triangles, t_lower, t_upper, t_childr
             if root < 0:
                 continue
             for position in items_within(p, q, reach, e_lower, e_upper, e_children, e_ranges, root, stack):
-                a, b = edges[position, 0], edges[position, 1]
-                s, t = segment_parameters(nodes[i], nodes[i + 1], a, b)
-                r = (1.0 - s) * nodes[i] + s * nodes[i + 1] - (1.0 - t) * a - t * b
-                gap = np.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) - hose_radius
+                gap = _segment_distance(nodes[i], nodes[i + 1], edges[position, 0], edges[position, 1]) - hose_radius
                 if gap < cutoff:
                     kinds.append(SEGMENT_EDGE)
                     first.append(i)
@@ -247,3 +244,49 @@ def segment_gaps(starts, ends, hose_radius, bound, triangles, normals, lower, up
                 gaps[m, i] = d - hose_radius
                 nearest[m, i] = position
     return gaps, nearest
+
+
+@njit(cache=True)
+def _segment_distance(p, q, a, b):
+    # distance (mm) of segments pq and ab
+    s, t = segment_parameters(p, q, a, b)
+    r = (1.0 - s) * p + s * q - (1.0 - t) * a - t * b
+    return np.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+
+
+@njit(cache=True)
+def swept_edges_clear(start, end, first, second, edges, clearances, evaluations):
+    """Whether each hose segment first[p], carried from its place in `start` to that in `end` ((N+1, 3) mm, its ends
+    on straight lines), stays farther than clearances[p] mm from edge second[p], for every listed pair.
+
+    Branch and bound on the fraction tau of the move: the segment moves by at most L = the longer of its ends'
+    moves per unit of tau, so over [tau_a, tau_b] its distance is at least (d_a + d_b - L (tau_b - tau_a)) / 2;
+    an interval is split until that bound clears or a distance does not.  Undecided after `evaluations` distances
+    per pair: not clear (the step is then cut).
+    """
+    intervals = np.empty((evaluations + 2, 4))
+    for p in range(first.shape[0]):
+        i, a, b, clearance = first[p], edges[second[p], 0], edges[second[p], 1], clearances[p]
+        p0, q0, p1, q1 = start[i], start[i + 1], end[i], end[i + 1]
+        move = max(np.sqrt(np.sum((p1 - p0) ** 2)), np.sqrt(np.sum((q1 - q0) ** 2)))
+        d0, d1 = _segment_distance(p0, q0, a, b), _segment_distance(p1, q1, a, b)
+        if min(d0, d1) <= clearance:
+            return False
+        intervals[0] = (0.0, d0, 1.0, d1)
+        count, used = 1, 2
+        while count > 0:
+            count -= 1
+            ta, da, tb, db = intervals[count]
+            if da + db - move * (tb - ta) > 2.0 * clearance:
+                continue
+            if used == evaluations:
+                return False
+            tm = 0.5 * (ta + tb)
+            dm = _segment_distance(p0 + tm * (p1 - p0), q0 + tm * (q1 - q0), a, b)
+            used += 1
+            if dm <= clearance:
+                return False
+            intervals[count] = (ta, da, tm, dm)
+            intervals[count + 1] = (tm, dm, tb, db)
+            count += 2
+    return True

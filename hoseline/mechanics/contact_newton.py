@@ -46,7 +46,7 @@ from hoseline.mechanics.contact import (
     pair_gaps,
     rotation_terms,
 )
-from hoseline.mechanics.contact_mesh import MeshArrays
+from hoseline.mechanics.contact_mesh import MeshArrays, swept_edges_clear
 from hoseline.mechanics.contact_solve import (
     banded_step,
     dense_step,
@@ -58,6 +58,7 @@ from hoseline.mechanics.newton import NewtonReport, RodProperties, apply_step, e
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 
 SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
+SWEPT_EVALUATIONS = 4096  # distances per segment-edge pair in the swept check of a step (contact_mesh.swept_edges_clear)
 
 
 _CONTROLLER: list[ThreadpoolController] = []
@@ -254,22 +255,22 @@ class StepFilter:
     plane).  A trial state is accepted only if every watched gap stays above SAFE_FRACTION of its
     value (`admits`); as a primitive cannot cross a body without ending inside it or passing
     through it, no accepted step crosses into penetration.
-    Meshes are surfaces, not bodies (contact_mesh.py, step filter): a segment-edge pair's fraction is
-    kept below (1 - SAFE_FRACTION) gap / move bound (conservative advancement), and a station's whole
-    path must clear the meshes: chords: (the stations now (N+1, 3) mm, their gaps to the meshes
-    (N+1,) mm, inf where out of reach, and the bound (N+1,) mm of the path's distance from its chord
-    for the whole step), or None without meshes.
+    Meshes are surfaces, not bodies (contact_mesh.py, step filter): the whole path of every station
+    and of every segment near an edge must stay clear by SAFE_FRACTION of its gap now.  swept: (the
+    stations now (N+1, 3) mm, their gaps to the meshes (N+1,) mm, inf where out of reach, the bound
+    (N+1,) mm of each station path's distance from its chord for the whole step, and the
+    segment-edge pairs within reach (segments, edges, gaps mm)), or None without meshes.
     """
 
     pairs: tuple
     gaps: np.ndarray
     limit: float
-    chords: tuple | None = None
+    swept: tuple | None = None
 
     def admits(self, props: RodProperties, clamps: Clamps, trial: RodState, model: ContactModel, alpha: float) -> bool:
         """Whether the trial state, `alpha` times the step, keeps every watched gap above SAFE_FRACTION of its value."""
         nodes = centerline(trial.frames, clamps.start_point, props.segment_length)
-        if self.chords is not None and not self._paths_clear(nodes, model, alpha):
+        if self.swept is not None and not self._paths_clear(nodes, model, alpha):
             return False
         if self.gaps.size == 0:
             return True
@@ -279,14 +280,21 @@ class StepFilter:
         return bool(np.all(gaps > SAFE_FRACTION * self.gaps))
 
     def _paths_clear(self, nodes: np.ndarray, model: ContactModel, alpha: float) -> bool:
-        """Whether every station near a mesh stays clear of it along its path, by SAFE_FRACTION of its gap now.
+        """Whether every station and every segment near a mesh edge stays clear of the meshes along its path, by
+        SAFE_FRACTION of its gap now.
 
         The path of station k lies within alpha^2 bend_k of its chord (contact_mesh.py), so its gap along the
-        step is at least the chord's gap less that."""
-        start, gaps, bend = self.chords
+        step is at least the chord's gap less that; a segment's points within alpha^2 bend of the segment
+        carried along its ends' chords (contact_mesh.swept_edges_clear)."""
+        start, gaps, bend, (segments, edges, edge_gaps) = self.swept
         near = np.isfinite(gaps)
-        chord_gaps = np.min(model.mesh.segment_gaps(start[near], nodes[near], model.hose_radius, math.inf)[0], axis=0)
-        return bool(np.all(chord_gaps - alpha * alpha * bend[near] > SAFE_FRACTION * gaps[near]))
+        if np.any(near):
+            chord_gaps = np.min(model.mesh.segment_gaps(start[near], nodes[near], model.hose_radius, math.inf)[0],
+                                axis=0)
+            if not np.all(chord_gaps - alpha * alpha * bend[near] > SAFE_FRACTION * gaps[near]):
+                return False
+        clearances = model.hose_radius + SAFE_FRACTION * edge_gaps + alpha * alpha * bend[segments + 1]
+        return bool(swept_edges_clear(start, nodes, segments, edges, model.mesh.edges, clearances, SWEPT_EVALUATIONS))
 
 
 def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, model: ContactModel) -> StepFilter:
@@ -298,17 +306,16 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
     nodes = centerline(state.frames, clamps.start_point, h)
     cutoff = float(reach[-1]) + model.activation
     kinds, first, second, gaps = model.pairs(nodes, cutoff, meshes=False)
-    chords = None
+    swept = None
     if model.mesh.count:
-        on_edges = model.mesh.pairs(nodes, model.hose_radius, cutoff)
-        edges = on_edges[0] == SEGMENT_EDGE
-        kinds, first, second, gaps = (np.concatenate([a, b[edges]]) for a, b in zip((kinds, first, second, gaps), on_edges))
+        mesh_kinds, segments, edges, edge_gaps = model.mesh.pairs(nodes, model.hose_radius, cutoff)
+        on_edges = mesh_kinds == SEGMENT_EDGE
         station_gaps = np.min(model.mesh.segment_gaps(nodes, nodes, model.hose_radius, cutoff)[0], axis=0)
         station_gaps[station_gaps >= cutoff] = math.inf  # out of reach
         bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
-        chords = (nodes, station_gaps, bend)
+        swept = (nodes, station_gaps, bend, (segments[on_edges], edges[on_edges], edge_gaps[on_edges]))
     if kinds.size == 0:
-        return StepFilter((kinds, first, second), gaps, 1.0, chords)
+        return StepFilter((kinds, first, second), gaps, 1.0, swept)
     last = props.segments
     bound = np.where(np.isin(kinds, STATION_KINDS), reach[first], reach[np.minimum(first + 1, last)])
     bound = bound + np.where(kinds == SEGMENT_SEGMENT, reach[np.minimum(second + 1, last)], 0.0)
@@ -317,10 +324,9 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
     balls, capsules = kinds == SEGMENT_BALL, kinds == SEGMENT_CAPSULE
     thickness[balls] = 2.0 * model.balls[second[balls], 3]
     thickness[capsules] = 2.0 * model.capsules[second[capsules], 6]
-    thickness[kinds == SEGMENT_EDGE] = -SAFE_FRACTION * gaps[kinds == SEGMENT_EDGE]  # a mesh edge has none
     with np.errstate(divide="ignore", invalid="ignore"):
         fractions = np.where(bound > 0.0, (gaps + thickness) / bound, np.inf)
-    return StepFilter((kinds, first, second), gaps, float(min(1.0, np.min(fractions))), chords)
+    return StepFilter((kinds, first, second), gaps, float(min(1.0, np.min(fractions))), swept)
 
 
 def solve_with_contact(
