@@ -58,7 +58,7 @@ from hoseline.mechanics.newton import NewtonReport, RodProperties, apply_step, e
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 
 SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
-SWEPT_EVALUATIONS = 4096  # distances per segment-edge pair in the swept check of a step (contact_mesh.swept_edges_clear)
+SWEPT_EVALUATIONS = 256  # distances per segment-edge pair in the swept check of a step (contact_mesh.swept_edges_clear)
 
 
 _CONTROLLER: list[ThreadpoolController] = []
@@ -308,10 +308,12 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
     kinds, first, second, gaps = model.pairs(nodes, cutoff, meshes=False)
     swept = None
     if model.mesh.count:
-        mesh_kinds, segments, edges, edge_gaps = model.mesh.pairs(nodes, model.hose_radius, cutoff)
+        station_cutoffs, segment_cutoffs = reach + model.activation, reach[1:] + model.activation
+        mesh_kinds, segments, edges, edge_gaps = model.mesh.pairs(nodes, model.hose_radius,
+                                                                  (np.zeros_like(reach), segment_cutoffs), every_feature=True)
         on_edges = mesh_kinds == SEGMENT_EDGE
         station_gaps = np.min(model.mesh.segment_gaps(nodes, nodes, model.hose_radius, cutoff)[0], axis=0)
-        station_gaps[station_gaps >= cutoff] = math.inf  # out of reach
+        station_gaps[station_gaps >= station_cutoffs] = math.inf  # out of reach
         bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
         swept = (nodes, station_gaps, bend, (segments[on_edges], edges[on_edges], edge_gaps[on_edges]))
     if kinds.size == 0:

@@ -113,7 +113,7 @@ class Box:
         object.__setattr__(self, "center", _point(self.center, f"{label} center"))
         size = np.asarray(self.size, dtype=float).reshape(-1)
         if size.shape != (3,) or not np.all(np.isfinite(size) & (size > 0.0)):
-            raise ValueError(f"{label} size = {list(size)}: must be three positive edge lengths in mm")
+            raise ValueError(f"{label} size = {size.tolist()}: must be three positive edge lengths in mm")
         object.__setattr__(self, "size", size)
         axes = np.asarray(self.axes, dtype=float)
         if axes.shape != (3, 3) or not np.all(np.isfinite(axes)) or np.any(np.linalg.norm(axes, axis=1) <= 0.0):

@@ -76,9 +76,10 @@ def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, stat
     reports = []
     for name in names:
         mine = active_owners == name
-        touching = set(a_first[mine].tolist())
+        at_stations = np.isin(a_kinds[mine], STATION_KINDS)  # a mesh touches stations and segments: count each once
+        touching = set(zip(at_stations.tolist(), a_first[mine].tolist()))
         if name == "self":
-            touching |= set(a_second[mine].tolist())
+            touching |= set(zip(at_stations.tolist(), a_second[mine].tolist()))
         order = np.argsort(arc[mine], kind="stable")
         force = forces[mine][order]
         reports.append(ObstacleContact(
