@@ -22,7 +22,7 @@ from hoseline.mechanics.contact_mesh import pack_meshes
 from hoseline.mechanics.rod import centerline
 
 RADIUS, D_HAT, WEIGHT = 1.0, 3.0, 1.7
-TRIANGLE = np.array([[0.0, 0.0, 0.0], [4.0, 0.5, 0.3], [1.0, 3.5, -0.4]])
+TRIANGLE = np.array([[0.0, 0.0, 0.0], [4.0, 0.5, 0.3], [1.0, 3.5, -0.4]]) + [1.3, -0.7, 0.4]  # off the origin (a wrong sign of a corner's coefficient shows)
 NO_PLANES, NO_BALLS, NO_CAPSULES = np.zeros((0, 6)), np.zeros((0, 4)), np.zeros((0, 7))
 
 
@@ -86,7 +86,8 @@ def test_station_triangle_gradient_and_hessian_in_every_region(feature):
 @pytest.mark.parametrize("case", ["crossing", "end on edge", "over an edge end", "end to end"])
 def test_segment_edge_gradient_and_hessian(case):
     rng = np.random.default_rng(len(case))
-    edge = np.array([[0.0, 0.0, 0.0], [5.0, 0.0, 0.0]])
+    offset = np.array([0.6, 1.1, -0.3])  # off the origin, where a wrong sign of a point's coefficient shows
+    edge = np.array([[0.0, 0.0, 0.0], [5.0, 0.0, 0.0]]) + offset
     for _ in range(5):
         lift = np.array([0.0, 0.0, rng.uniform(2.2, 3.5)])
         if case == "crossing":  # both closest points inside: s, t free
@@ -98,7 +99,7 @@ def test_segment_edge_gradient_and_hessian(case):
         else:  # both at ends
             p, q = np.array([6.0, 0.5, 0.0]), np.array([9.0, 1.0, 1.0])
         jitter = 0.1 * rng.standard_normal((2, 3))
-        nodes = np.array([p, q]) + lift + jitter
+        nodes = np.array([p, q]) + lift + jitter + offset
         _check_against_finite_differences(nodes, np.zeros((0, 3, 3)), edge[None], SEGMENT_EDGE, 0, 0)
 
 
