@@ -375,3 +375,31 @@ def test_a_straight_start_through_a_mesh_is_refused_naming_it(tmp_path):
     with pytest.raises(PlacementError) as error:
         solve(problem, estimate_error=False)
     assert "'plate'" in str(error.value) and "straight hose" in str(error.value) and "segment" in str(error.value)
+
+
+def test_the_step_filter_refuses_a_step_through_a_thin_plate_that_ends_clear_of_it():
+    from hoseline.mechanics.contact_newton import step_filter
+    from hoseline.mechanics.newton import apply_step
+    from hoseline.model.hose import Hose
+    from hoseline.model.mounts import Mount
+    from hoseline.model.obstacles import Mesh
+    from hoseline.model.problem import Problem
+    from hoseline.procedures.contact.model import contact_model
+    from hoseline.procedures.placement.sequence import place_only
+
+    hose = Hose(length=300.0, outer_diameter=2 * HOSE_RADIUS, bending_stiffness=1e5, torsional_stiffness=1e5, segments=30)
+    along = np.array([1.0, 0.0, 0.0])
+    props, clamps, state, _ = place_only(Problem(hose, Mount(np.zeros(3), along), Mount(np.array([299.0, 0.0, 0.0]), along)))
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    middle = (nodes[:, 0] > 90.0) & (nodes[:, 0] < 210.0)
+    height = float(np.max(nodes[middle, 2])) + HOSE_RADIUS + 3.5  # a plate 3.5 mm above the hose's middle
+    plate = Mesh(np.array([[100.0, -50.0, height], [200.0, -50.0, height], [150.0, 50.0, height]]),
+                 np.array([[0, 1, 2]]), "plate")
+    model = contact_model([plate], HOSE_RADIUS, props.segment_length, 1.0)
+    for turn, admitted in ((0.2, False), (0.005, True)):  # every segment turned up: the hose swings up about its start
+        step = np.zeros(3 * props.segments)
+        step[1::3] = -turn
+        trial = apply_step(props, clamps, state, step, np.zeros(3))
+        moved = centerline(trial.frames, clamps.start_point, props.segment_length)
+        assert model.penetration(moved) is None  # clear at the end of the step: 30 mm above the plate, or below it
+        assert step_filter(props, clamps, state, step, model).admits(props, clamps, trial, model, 1.0) == admitted
