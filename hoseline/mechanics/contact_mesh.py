@@ -10,31 +10,38 @@ distance per pair would not do as a barrier: a segment lying on a face (a hose r
 floor) is at the distance min(d_p, d_q) from it, with a kink where it lies flat, and Newton's
 quadratic convergence needs a C2 energy; with stations a flat face gives exactly the
 station-plane pairs of an analytic plane.
-Edges left out: an edge between two triangles in one plane that continue each other (a
-floor's or a box face's diagonal).  Over a flat region the distance of a point of a segment is
-linear along it, so it is smallest at an end, a station, and the edge would only push a second
-time where the hose lies across it.  Kept: boundary edges, ridges, valleys, edges of three or
-more triangles, folds.  Triangles of zero area (a line) are left out; their edges stay where
-other triangles border them.  Exactly coincident vertices are merged first (a STEP file's faces
-and an STL's triangles do not share theirs).
+Left out, so that a flat surface pushes only along its normal and each station counts once: an
+edge between two triangles in one plane that continue each other (a floor's or a box face's
+diagonal: over a flat region the distance of a point of a segment is linear along it, smallest at a
+station), and a triangle's edge and vertex regions at such flat features (the neighbour across is
+nearer; on the feature itself, a tie, one triangle there pairs: MeshArrays.features); likewise an
+edge's end where exactly two edges continue each other in a straight line (MeshArrays.corners).
+Kept: boundary edges, ridges, valleys, edges of three or more triangles, folds.  Triangles of zero
+area (a line) are left out; their edges stay where other triangles border them.  Exactly
+coincident vertices are merged first (a STEP file's faces and an STL's triangles do not share theirs).
 
 Search.  A bounding-volume hierarchy over the triangles and one over the kept edges of each mesh
 (mechanics/bounding_volumes.py, the tree of the clearance search), so a query opens about
 log2(triangles) boxes and a 100 000-triangle mesh costs a station a few dozen distance
 evaluations, not 100 000.
 
-Step filter (conservative advancement, contact_newton.step_filter).  A mesh is a surface, not a
-solid: a station or segment could pass through a thin triangle within one step and end clear on
-the other side, so the analytic obstacles' argument (a primitive cannot cross a body without
-ending inside it) does not hold.  Instead no point of the hose may travel farther than its
-current gap to the mesh: a rotation delta_i moves every point of segment i by at most
-reach_(i+1) = h sum_(l <= i) |delta_l| per unit of the step, so the step is cut to
-(1 - SAFE_FRACTION) G_i / reach_(i+1) over the segments, G_i the exact gap of segment i to the
-mesh (segment_gaps: the segment-triangle distance of mechanics/proximity.py, zero where the
-segment crosses a triangle, less r).  Then no point comes nearer than SAFE_FRACTION of its gap
-anywhere along the step, whatever the mesh's thickness.  The price: the bound ignores direction,
-so a hose sliding along a mesh it rests on (gaps below d_hat) moves a step of at most about its
-gap per segment rotation bound; the analytic plane does not have that limit.
+Step filter (contact_newton.StepFilter).  A mesh is a surface, not a solid: a station or segment
+could pass through a thin triangle within one step and end clear on the other side, so the
+analytic obstacles' argument (a primitive cannot cross a body without ending inside it) does not
+hold.  Plain conservative advancement (no point travels farther than its gap, with the isotropic
+bound h sum |delta_l| of a rotation step's move) holds but stalls a hose resting at gaps of 1e-4 mm
+that has to slide.  So the whole path of the step is checked, which a sliding hose does not come
+nearer along: a frame rotated by alpha delta turns its tangent on a circular arc, so station k's
+path lies within (h/8) sum_(l<k) (alpha |delta_l|)^2 of its chord (the interpolation error bound,
+|d2/dtau2 exp(tau theta) t| <= theta^2), and the chord's exact gap to the meshes (segment_gaps)
+less that bound must stay above SAFE_FRACTION of the station's gap now.  A segment's interior
+first touches a mesh only at a kept edge (touching a face, one of its stations or a kept edge
+touches too), so each segment-edge pair within reach is checked along the segment carried by its
+ends' chords (swept_edges_clear).  Every first contact being a station-triangle or segment-edge
+touch, no accepted step enters or passes through a mesh.
+
+Written by hand (Numba), as contact.py: no library gives these pairs, their search and the swept
+checks with the exact derivatives the barrier needs.
 """
 
 from __future__ import annotations
