@@ -138,16 +138,26 @@ class ContactModel:
     def smallest_gaps(self, nodes: np.ndarray) -> dict[str, float]:
         """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to each obstacle (and "self")."""
         smallest = {name: math.inf for name in self.names} | ({"self": math.inf} if self.self_exclusion >= 0 else {})
-        kinds, _, second, gaps = self.pairs(nodes, math.inf, meshes=False)
+        (kinds, second, gaps), mesh_gaps = self._all_gaps(nodes)
         for kind, j, gap in zip(kinds, second, gaps):
             name = self.owner(kind, j)
             smallest[name] = min(smallest[name], float(gap))
-        if self.mesh.count:
-            mesh_gaps = self.mesh.segment_gaps(nodes[:-1], nodes[1:], self.hose_radius, math.inf)[0]
-            for mesh in range(self.mesh.count):
-                name = self.names[int(self.mesh.owners[mesh])]
-                smallest[name] = min(smallest[name], float(np.min(mesh_gaps[mesh])))
+        for mesh in range(self.mesh.count):
+            name = self.names[int(self.mesh.owners[mesh])]
+            smallest[name] = min(smallest[name], float(np.min(mesh_gaps[mesh])))
         return smallest
+
+    def smallest_gap(self, nodes: np.ndarray) -> float:
+        """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to anything it may touch."""
+        (_, _, gaps), mesh_gaps = self._all_gaps(nodes)
+        return float(min(np.min(gaps, initial=math.inf), np.min(mesh_gaps, initial=math.inf)))
+
+    def _all_gaps(self, nodes: np.ndarray):
+        """((kinds, second, gaps) of every analytic and self pair, the (K, N) gaps of each segment to each mesh)."""
+        kinds, _, second, gaps = self.pairs(nodes, math.inf, meshes=False)
+        mesh_gaps = (self.mesh.segment_gaps(nodes[:-1], nodes[1:], self.hose_radius, math.inf)[0] if self.mesh.count
+                     else np.zeros((0, nodes.shape[0] - 1)))
+        return (kinds, second, gaps), mesh_gaps
 
 
 def self_exclusion(hose_radius: float, segment_length: float) -> int:
@@ -570,5 +580,4 @@ def penetration_message(model: ContactModel, kind: int, first: int, second: int,
 
 def minimum_gap(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:
     """The smallest gap (mm, surface to surface) over every pair: the hose's clearance to all it may touch."""
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    return min(model.smallest_gaps(nodes).values(), default=math.inf)
+    return model.smallest_gap(centerline(state.frames, clamps.start_point, props.segment_length))
