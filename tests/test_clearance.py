@@ -8,7 +8,7 @@ from numba import njit
 from scipy.optimize import minimize
 
 from hoseline.procedures.geometry.clearance import TriangleIndex
-from hoseline.procedures.geometry.proximity import segment_triangle_distance
+from hoseline.mechanics.proximity import segment_triangle_distance
 
 
 def brute_force_nearest(nodes, vertices, faces):

@@ -18,6 +18,7 @@ from hoseline.mechanics.rotations import frame_from_tangent, rotate_frames
 
 D_HAT = 0.5
 RADIUS = 1.0
+NO_TRIANGLES, NO_EDGES = np.zeros((0, 3, 3)), np.zeros((0, 2, 3))  # mesh pairs: tests/test_contact_mesh.py
 
 
 def test_barrier_derivatives_and_smoothness():
@@ -47,9 +48,9 @@ def _obstacles():
     return planes, balls, capsules
 
 
-def _energy(frames, h, planes, balls, capsules, kinds, first, second):
+def _energy(frames, h, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second):
     nodes = centerline(frames, np.zeros(3), h)
-    return node_terms(nodes, RADIUS, 1.7, D_HAT * 3, planes, balls, capsules, kinds, first, second)
+    return node_terms(nodes, RADIUS, 1.7, D_HAT * 3, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
 
 
 @pytest.mark.parametrize("kind", [STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT])
@@ -68,7 +69,7 @@ def test_node_gradient_and_hessian_against_finite_differences(kind):
         kinds, first, second = kinds[chosen], first[chosen], second[chosen]
     assert kinds.size > 0
     weight, d_hat = 1.7, 3 * D_HAT
-    energy, grad, hess, *_ = node_terms(nodes, RADIUS, weight, d_hat, planes, balls, capsules, kinds, first, second)
+    energy, grad, hess, *_ = node_terms(nodes, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
     assert energy > 0.0
     step = 1e-6
     for k in range(nodes.shape[0]):
@@ -76,8 +77,8 @@ def test_node_gradient_and_hessian_against_finite_differences(kind):
             plus, minus = nodes.copy(), nodes.copy()
             plus[k, x] += step
             minus[k, x] -= step
-            e_p, g_p, *_ = node_terms(plus, RADIUS, weight, d_hat, planes, balls, capsules, kinds, first, second)
-            e_m, g_m, *_ = node_terms(minus, RADIUS, weight, d_hat, planes, balls, capsules, kinds, first, second)
+            e_p, g_p, *_ = node_terms(plus, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
+            e_m, g_m, *_ = node_terms(minus, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
             assert grad[k, x] == pytest.approx((e_p - e_m) / (2 * step), rel=1e-5, abs=1e-7 * (1 + abs(energy)))
             np.testing.assert_allclose(hess[:, k, :, x], (g_p - g_m) / (2 * step), rtol=1e-4,
                                        atol=1e-5 * (1 + np.max(np.abs(hess))))
@@ -92,7 +93,7 @@ def test_rotation_gradient_and_hessian_against_finite_differences():
     assert {STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE} <= set(kinds.tolist())
 
     def terms(fr):
-        energy, g, hn, *_ = _energy(fr, h, planes, balls, capsules, kinds, first, second)
+        energy, g, hn, *_ = _energy(fr, h, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
         grad, hess = rotation_terms(fr, h, g, hn)
         return energy, grad, hess
 

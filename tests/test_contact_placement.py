@@ -39,8 +39,8 @@ def test_contact_tables_round_trip_through_toml():
 @pytest.mark.parametrize("contact, expected", [
     ({"self": 1}, "contact.self = 1: must be true or false"),
     ({"slf": True}, "did you mean 'contact.self'"),
-    ({"obstacles": [{"kind": "box"}]}, "contact.obstacles[0].kind = \"box\": must be one of"),
-    ({"obstacles": [{"kind": "plane", "point": [0, 0, 0]}]}, "contact.obstacles[0]: a plane takes point and normal (mm): missing normal"),
+    ({"obstacles": [{"kind": "cone"}]}, "contact.obstacles[0].kind = \"cone\": must be one of"),
+    ({"obstacles": [{"kind": "plane", "point": [0, 0, 0]}]}, "contact.obstacles[0]: a plane takes point and normal: missing normal"),
     ({"obstacles": [{"kind": "sphere", "center": [0.0, 0, 0], "radius": 1.0, "normal": [0, 0, 1]}]}, "normal given"),
     ({"obstacles": [{"kind": "sphere", "center": [0.0, 0, 0], "radius": -2.0}]}, "contact.obstacles[0].radius = -2.0: must be positive"),
     ({"obstacles": [DRUM, DRUM]}, "contact.obstacles[1].name = 'drum' is used by an earlier obstacle"),

@@ -35,7 +35,7 @@ def read_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     if path.suffix.lower() in STEP_SUFFIXES:
         return _read_step(path)
     try:
-        mesh = trimesh.load(path, force="mesh")
+        mesh = trimesh.load(path, force="mesh", process=False)  # processing would drop non-finite triangles silently
     except ModuleNotFoundError as exc:  # trimesh guesses the encoding of text that is not UTF-8 with an optional module
         raise ObstacleFileError(
             f"{path}: cannot be read as a mesh: its text is neither ASCII nor UTF-8 (damaged, or another encoding; "
@@ -59,7 +59,7 @@ def _checked(path: Path, vertices: np.ndarray, faces: np.ndarray) -> tuple[np.nd
             "points and triangles (a damaged line, e.g. a vertex with two numbers): export the mesh again"
         )
     if not np.all(np.isfinite(vertices)):
-        raise ObstacleFileError(f"{path}: has vertices that are not finite numbers")
+        raise ObstacleFileError(f"{path}: has vertices that are not finite numbers (NaN or infinite coordinates): export the mesh again")
     largest = float(np.max(np.abs(vertices), initial=0.0))
     if largest > limits.COORDINATE_MM:
         raise ObstacleFileError(

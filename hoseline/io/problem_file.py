@@ -112,6 +112,14 @@ entering (frictionless), and the hose kept out of itself::
     start = [0.0, 0.0, 0.0]          # mm, the axis from start to end
     end = [0.0, 100.0, 0.0]
     radius = 15.0                    # mm
+    [[contact.obstacles]]
+    kind = "box"                     # sharp edges and corners
+    center = [0.0, -60.0, 0.0]       # mm
+    size = [40.0, 20.0, 30.0]        # mm, edge lengths along axes
+    axes = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]  # optional: directions of the edges (perpendicular)
+    [[contact.obstacles]]
+    kind = "mesh"                    # a surface: the hose stays on the side it starts on
+    file = "bracket.stl"             # STL, OBJ, PLY or STEP, mm, relative to the problem file
 
 These are not the [[obstacles]] of a sweep file (meshes the sweep measures clearance to, without
 contact); a sweep file may hold [contact] too (static obstacles, kept out of at every pose).
@@ -145,7 +153,7 @@ from hoseline.model.braid import Braid
 from hoseline.model.clips import Clip
 from hoseline.model.fittings import EndFittings, Fitting
 from hoseline.model.mounts import Mount
-from hoseline.model.obstacles import Cylinder, Obstacle, Plane, Sphere
+from hoseline.model.obstacles import Box, Cylinder, Mesh, Obstacle, Plane, Sphere
 from hoseline.model.problem import Problem, reaches
 from hoseline.model.preset import Preset
 from hoseline.model.stiffeners import PRESETS, SPRING_COUNTS, SpringTable, Stiffeners, thesis_preset
@@ -199,12 +207,15 @@ _UNITS = {
     "fittings.length": "mm, straight: port to hose; elbow: port to vertex",
     "fittings.outer_diameter": "mm, of the fitting",
     "self": "keep the hose out of itself",
-    "kind": "plane, sphere or cylinder",
+    "kind": "plane, sphere, cylinder, box or mesh",
     "normal": "towards the side the hose stays on",
     "center": "mm",
     "radius": "mm",
     "obstacles.start": "mm, one end of the axis",
     "obstacles.end": "mm, the other end of the axis",
+    "size": "mm, edge lengths along axes",
+    "axes": "directions of the box's edges, perpendicular",
+    "file": "STL, OBJ, PLY or STEP mesh (mm), relative to the problem file",
 }
 
 
@@ -581,11 +592,13 @@ class _OverallLength(_Section):
     overall_length: Annotated[float, _in_range(limits.LENGTH_MM, "mm", "1 mm to 100 m")]
 
 
-CONTACT_KEYS = {"plane": ("point", "normal"), "sphere": ("center", "radius"), "cylinder": ("start", "end", "radius")}
+CONTACT_KEYS = {"plane": ("point", "normal"), "sphere": ("center", "radius"), "cylinder": ("start", "end", "radius"),
+                "box": ("center", "size"), "mesh": ("file",)}
+CONTACT_OPTIONAL_KEYS = {"box": ("axes",)}
 
 
 class ContactObstacleSection(_Section):
-    """[[contact.obstacles]]: one analytic obstacle; which keys a kind takes is checked by _contact_obstacle (mm)."""
+    """[[contact.obstacles]]: one obstacle; which keys a kind takes is checked by _contact_obstacle (mm)."""
 
     kind: str
     name: str | None = None
@@ -595,6 +608,9 @@ class ContactObstacleSection(_Section):
     start: Point | None = None
     end: Point | None = None
     radius: Annotated[float, _positive("mm")] | None = None
+    size: Point | None = None
+    axes: list[Direction] | None = None
+    file: str | None = None
 
 
 class ContactSection(_Section):
@@ -769,7 +785,7 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             name=spec.name,
             clips=tuple(_clip(index, clip) for index, clip in enumerate(spec.clips)),
             fittings=fittings,
-            contact=_contact_obstacles(spec.contact),
+            contact=_contact_obstacles(spec.contact, Path.cwd() if base_dir is None else Path(base_dir)),
             self_contact=spec.contact is not None and spec.contact.self_contact,
         )
     except ValueError as exc:  # the model's own checks; its messages name the field
@@ -829,8 +845,9 @@ def _clip(index: int, section: ClipSection) -> Clip:
         raise ValueError(f"clips[{index}]: {exc}") from None
 
 
-def _contact_obstacles(section: ContactSection | None) -> tuple[Obstacle, ...]:
-    """The obstacles of [[contact.obstacles]], named by default after their kind (numbered when repeated)."""
+def _contact_obstacles(section: ContactSection | None, base_dir: Path) -> tuple[Obstacle, ...]:
+    """The obstacles of [[contact.obstacles]], named by default after their kind (numbered when repeated); mesh files
+    relative to base_dir."""
     if section is None:
         return ()
     kinds = [table.kind for table in section.obstacles]
@@ -839,31 +856,53 @@ def _contact_obstacles(section: ContactSection | None) -> tuple[Obstacle, ...]:
     for index, table in enumerate(section.obstacles):
         counters[table.kind] = counters.get(table.kind, 0) + 1
         default = table.kind if kinds.count(table.kind) == 1 else f"{table.kind} {counters[table.kind]}"
-        obstacles.append(_contact_obstacle(index, table, table.name or default))
+        obstacles.append(_contact_obstacle(index, table, table.name or default, base_dir))
     return tuple(obstacles)
 
 
-def _contact_obstacle(index: int, table: ContactObstacleSection, name: str) -> Obstacle:
+def _contact_obstacle(index: int, table: ContactObstacleSection, name: str, base_dir: Path) -> Obstacle:
     """The Obstacle of one [[contact.obstacles]] table; its errors name the table and the key."""
     label = f"contact.obstacles[{index}]"
     if table.kind not in CONTACT_KEYS:
         raise ValueError(f"{label}.kind = {_show(table.kind)}: must be one of "
-                         f"{', '.join(repr(kind) for kind in CONTACT_KEYS)} (boxes and meshes are not implemented yet)")
+                         f"{', '.join(repr(kind) for kind in CONTACT_KEYS)}")
     keys = CONTACT_KEYS[table.kind]
-    given = [key for key in ("point", "normal", "center", "start", "end", "radius") if getattr(table, key) is not None]
+    optional = CONTACT_OPTIONAL_KEYS.get(table.kind, ())
+    given = [key for key in ("point", "normal", "center", "start", "end", "radius", "size", "axes", "file")
+             if getattr(table, key) is not None]
     missing = [key for key in keys if key not in given]
-    extra = [key for key in given if key not in keys]
+    extra = [key for key in given if key not in keys + optional]
     if missing or extra:
         problem = f"missing {', '.join(missing)}" if missing else f"{', '.join(extra)} given"
-        raise ValueError(f"{label}: a {table.kind} takes {' and '.join(keys)} (mm): {problem}")
+        also = f" (optional: {', '.join(optional)})" if optional else ""
+        raise ValueError(f"{label}: a {table.kind} takes {' and '.join(keys)}{also}: {problem}")
     try:
         if table.kind == "plane":
             return Plane(table.point, table.normal, name)
         if table.kind == "sphere":
             return Sphere(table.center, table.radius, name)
-        return Cylinder(table.start, table.end, table.radius, name)
+        if table.kind == "cylinder":
+            return Cylinder(table.start, table.end, table.radius, name)
+        if table.kind == "box":
+            return Box(table.center, table.size, np.eye(3) if table.axes is None else table.axes, name)
+        return _contact_mesh(label, table.file, name, base_dir)
     except ValueError as exc:
         raise ValueError(f"{label}: {exc}") from None
+
+
+def _contact_mesh(label: str, file: str, name: str, base_dir: Path) -> Mesh:
+    """The Mesh of a [[contact.obstacles]] table of kind "mesh", read from `file` (relative to base_dir)."""
+    from hoseline.io.obstacle_mesh import ObstacleFileError, read_mesh  # trimesh takes 0.2-0.4 s to load: only for meshes
+
+    path = (base_dir / file).resolve()
+    try:
+        vertices, faces = read_mesh(path)
+    except ObstacleFileError as exc:
+        raise ValueError(f"file = {_show(file)}: {exc}") from None
+    except OSError as exc:
+        raise ValueError(f"file = {_show(file)}: cannot read {path}: {exc.strerror or exc}; give the mesh file's path "
+                         "relative to the problem file") from None
+    return Mesh(vertices, faces, name, str(path))
 
 
 def _contact_dict(problem: Problem) -> dict[str, Any]:
@@ -876,9 +915,14 @@ def _contact_dict(problem: Problem) -> dict[str, Any]:
             table = {"kind": "plane", "point": _floats(obstacle.point), "normal": _floats(obstacle.normal)}
         elif isinstance(obstacle, Sphere):
             table = {"kind": "sphere", "center": _floats(obstacle.centre), "radius": float(obstacle.radius)}
-        else:
+        elif isinstance(obstacle, Cylinder):
             table = {"kind": "cylinder", "start": _floats(obstacle.start), "end": _floats(obstacle.end),
                      "radius": float(obstacle.radius)}
+        elif isinstance(obstacle, Box):
+            table = {"kind": "box", "center": _floats(obstacle.center), "size": _floats(obstacle.size),
+                     "axes": [_floats(axis) for axis in obstacle.axes]}
+        else:
+            table = {"kind": "mesh", "file": obstacle.file}
         tables.append(table | {"name": obstacle.name})
     return {"contact": {"self": bool(problem.self_contact), "obstacles": tables}}
 

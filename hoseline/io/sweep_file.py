@@ -26,7 +26,7 @@ The hose, the mounts at design position and the environment are those of a probl
     [sweep]
     compare_free_roll = true    # optional: also sweep with the end fitting free to spin
 
-    [contact]                   # optional, as in a problem file: static planes, spheres, cylinders
+    [contact]                   # optional, as in a problem file: static planes, spheres, cylinders, boxes, meshes
                                 # and self-contact, kept out of at every pose (no body: they do not move)
 
     [[clips]]                   # as in a problem file, plus:

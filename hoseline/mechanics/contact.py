@@ -17,6 +17,8 @@ Exact derivatives of a distance.  A pair's closest points are r(z) = sum_j c_j(z
 points X_j (segment ends, obstacle points) with coefficients affine in the parameters z (the
 positions along the segments), f = |r|^2 minimised over z in [0, 1]^k.  With the set of
 parameters strictly inside (0, 1) fixed (it is, away from a switch between closest features),
+and for a triangle, whose parameters (u, v) range over a simplex, the free directions those
+of the closest feature (two in the face, one along an edge, none at a vertex: triangle_parameters),
 the envelope theorem and the implicit function theorem give
     f_X = df/dX at z*,   f_XX = d2f/dX2 - f_Xz f_zz^-1 f_zX   (over the free parameters only),
 and d = sqrt(f).  No approximation; tests/test_contact_derivatives.py checks against finite
@@ -40,8 +42,12 @@ import math
 import numpy as np
 from numba import njit
 
-STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT = 0, 1, 2, 3
-PAIR_KINDS = ("station-plane", "segment-ball", "segment-capsule", "segment-segment")
+STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT, STATION_TRIANGLE, SEGMENT_EDGE = 0, 1, 2, 3, 4, 5
+PAIR_KINDS = ("station-plane", "segment-ball", "segment-capsule", "segment-segment", "station-triangle", "segment-edge")
+STATION_KINDS = (STATION_PLANE, STATION_TRIANGLE)  # pairs whose hose primitive is a station, not a segment
+MESH_KINDS = (STATION_TRIANGLE, SEGMENT_EDGE)  # pairs with a triangle mesh
+# the closest feature of a triangle abc to a point (triangle_parameters)
+FACE, EDGE_AB, EDGE_AC, EDGE_BC, VERTEX_A, VERTEX_B, VERTEX_C = 0, 1, 2, 3, 4, 5, 6
 PARALLEL = 1e-12  # relative: segments closer to parallel than this keep their first end as the closest point
 
 
@@ -72,7 +78,7 @@ def _clamp01(value):
 def segment_parameters(p1, q1, p2, q2):
     """Parameters (s, t) in [0, 1] of the closest points p1 + s (q1 - p1), p2 + t (q2 - p2) of two segments.
 
-    Ericson, Real-Time Collision Detection (2005) 5.1.9, as procedures/geometry/proximity.py's
+    Ericson, Real-Time Collision Detection (2005) 5.1.9, as mechanics/proximity.py's
     closest_points_of_segments, which returns the points; the contact terms need the parameters.
     """
     d1 = q1 - p1
@@ -93,6 +99,44 @@ def segment_parameters(p1, q1, p2, q2):
         t = 1.0
         s = _clamp01((b - c) / a)
     return s, t
+
+
+@njit(cache=True)
+def triangle_parameters(x, a, b, c):
+    """(u, v, feature) of the point (1 - u - v) a + u b + v c of triangle abc nearest to x.
+
+    Ericson, Real-Time Collision Detection (2005) 5.1.5 (the Voronoi regions of the vertices,
+    edges and face, as mechanics/proximity.py's closest_point_on_triangle), returning the
+    barycentric parameters and the region: FACE (u, v free), EDGE_AB (v = 0), EDGE_AC (u = 0),
+    EDGE_BC (u + v = 1), or a vertex.  abc must have a positive area (contact_mesh.py leaves
+    zero-area triangles out).
+    """
+    ab = b - a
+    ac = c - a
+    d1 = _dot3(ab, x - a)
+    d2 = _dot3(ac, x - a)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return 0.0, 0.0, VERTEX_A
+    d3 = _dot3(ab, x - b)
+    d4 = _dot3(ac, x - b)
+    if d3 >= 0.0 and d4 <= d3:
+        return 1.0, 0.0, VERTEX_B
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        return d1 / (d1 - d3), 0.0, EDGE_AB
+    d5 = _dot3(ab, x - c)
+    d6 = _dot3(ac, x - c)
+    if d6 >= 0.0 and d5 <= d6:
+        return 0.0, 1.0, VERTEX_C
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        return 0.0, d2 / (d2 - d6), EDGE_AC
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return 1.0 - w, w, EDGE_BC
+    scale = 1.0 / (va + vb + vc)
+    return vb * scale, vc * scale, FACE
 
 
 @njit(cache=True)
@@ -147,18 +191,38 @@ def distance_terms(points, m, c, dc, free):
 
 
 @njit(cache=True)
-def pair_geometry(kind, i, j, nodes, planes, balls, capsules):
+def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges):
     """The points, coefficients and free parameters of pair (kind, hose primitive i, obstacle primitive j).
 
     Returns (points (4, 3), m, c (4,), dc (4, 2), free (2,), node (4,) the station of each point or
     -1 for an obstacle point, radius of the obstacle primitive (mm)); not for STATION_PLANE.
-    For SEGMENT_SEGMENT, j is the second hose segment.
+    For SEGMENT_SEGMENT, j is the second hose segment; for STATION_TRIANGLE, i is a station and the
+    columns of dc are the closest feature's free directions (triangle_parameters).
     """
     points = np.zeros((4, 3))
     c = np.zeros(4)
     dc = np.zeros((4, 2))
     free = np.zeros(2, np.bool_)
     node = -np.ones(4, np.int64)
+    if kind == STATION_TRIANGLE:
+        a, b, t = triangles[j, 0], triangles[j, 1], triangles[j, 2]
+        u, v, feature = triangle_parameters(nodes[i], a, b, t)
+        points[0], points[1], points[2], points[3] = nodes[i], a, b, t
+        node[0] = i
+        c[0], c[1], c[2], c[3] = 1.0, -(1.0 - u - v), -u, -v
+        if feature == FACE or feature == EDGE_AB:  # d r / d u
+            dc[1, 0], dc[2, 0] = 1.0, -1.0
+            free[0] = True
+        if feature == FACE:  # d r / d v
+            dc[1, 1], dc[3, 1] = 1.0, -1.0
+            free[1] = True
+        elif feature == EDGE_AC:
+            dc[1, 0], dc[3, 0] = 1.0, -1.0
+            free[0] = True
+        elif feature == EDGE_BC:  # along b to c
+            dc[2, 0], dc[3, 0] = 1.0, -1.0
+            free[0] = True
+        return points, 4, c, dc, free, node, 0.0
     points[0] = nodes[i]
     points[1] = nodes[i + 1]
     node[0], node[1] = i, i + 1
@@ -175,6 +239,9 @@ def pair_geometry(kind, i, j, nodes, planes, balls, capsules):
     if kind == SEGMENT_CAPSULE:
         a, b = capsules[j, :3], capsules[j, 3:6]
         radius = capsules[j, 6]
+    elif kind == SEGMENT_EDGE:
+        a, b = edges[j, 0], edges[j, 1]
+        radius = 0.0
     else:
         a, b = nodes[j], nodes[j + 1]
         node[2], node[3] = j, j + 1
@@ -190,11 +257,11 @@ def pair_geometry(kind, i, j, nodes, planes, balls, capsules):
 
 
 @njit(cache=True)
-def _pair_distance(kind, i, j, nodes, planes, balls, capsules):
+def _pair_distance(kind, i, j, nodes, planes, balls, capsules, triangles, edges):
     # distance of one pair (mm; the obstacle primitive's radius not subtracted) and that radius
     if kind == STATION_PLANE:
         return _dot3(planes[j, 3:], nodes[i] - planes[j, :3]), 0.0
-    points, m, c, _, _, _, radius = pair_geometry(kind, i, j, nodes, planes, balls, capsules)
+    points, m, c, _, _, _, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges)
     r = np.zeros(3)
     for k in range(m):
         r += c[k] * points[k]
@@ -203,7 +270,7 @@ def _pair_distance(kind, i, j, nodes, planes, balls, capsules):
 
 @njit(cache=True)
 def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutoff):
-    """Every pair whose gap (mm, surface to surface) is below `cutoff` mm.
+    """Every pair with an analytic obstacle or the hose itself whose gap (mm, surface to surface) is below `cutoff` mm.
 
     Returns (kinds, first (hose station or segment), second (obstacle primitive or second
     segment), gaps), arrays of one entry per pair.  self_exclusion: segments i < j pair up when
@@ -215,27 +282,28 @@ def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutof
     first = np.empty(capacity, np.int64)
     second = np.empty(capacity, np.int64)
     gaps = np.empty(capacity)
+    no_triangles, no_edges = np.zeros((0, 3, 3)), np.zeros((0, 2, 3))  # meshes: contact_mesh.mesh_pairs
     count = 0
     for k in range(1, n_seg + 1):
         for j in range(planes.shape[0]):
-            d, _ = _pair_distance(STATION_PLANE, k, j, nodes, planes, balls, capsules)
+            d, _ = _pair_distance(STATION_PLANE, k, j, nodes, planes, balls, capsules, no_triangles, no_edges)
             if d - hose_radius < cutoff:
                 kinds[count], first[count], second[count], gaps[count] = STATION_PLANE, k, j, d - hose_radius
                 count += 1
     for i in range(n_seg):
         for j in range(balls.shape[0]):
-            d, radius = _pair_distance(SEGMENT_BALL, i, j, nodes, planes, balls, capsules)
+            d, radius = _pair_distance(SEGMENT_BALL, i, j, nodes, planes, balls, capsules, no_triangles, no_edges)
             if d - hose_radius - radius < cutoff:
                 kinds[count], first[count], second[count], gaps[count] = SEGMENT_BALL, i, j, d - hose_radius - radius
                 count += 1
         for j in range(capsules.shape[0]):
-            d, radius = _pair_distance(SEGMENT_CAPSULE, i, j, nodes, planes, balls, capsules)
+            d, radius = _pair_distance(SEGMENT_CAPSULE, i, j, nodes, planes, balls, capsules, no_triangles, no_edges)
             if d - hose_radius - radius < cutoff:
                 kinds[count], first[count], second[count], gaps[count] = SEGMENT_CAPSULE, i, j, d - hose_radius - radius
                 count += 1
         if self_exclusion >= 0:
             for j in range(i + self_exclusion + 1, n_seg):
-                d, _ = _pair_distance(SEGMENT_SEGMENT, i, j, nodes, planes, balls, capsules)
+                d, _ = _pair_distance(SEGMENT_SEGMENT, i, j, nodes, planes, balls, capsules, no_triangles, no_edges)
                 if d - 2.0 * hose_radius < cutoff:
                     kinds[count], first[count], second[count], gaps[count] = SEGMENT_SEGMENT, i, j, d - 2.0 * hose_radius
                     count += 1
@@ -243,10 +311,11 @@ def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutof
 
 
 @njit(cache=True)
-def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, kinds, first, second):
+def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, triangles, edges, kinds, first, second):
     """Barrier energy of the given pairs (N*mm), its gradient (N+1, 3) and Hessian (N+1, N+1, 3, 3) in the stations.
 
-    weight: kappa h, N/mm (energy per mm^2 of barrier).  Also per pair: the force on the hose
+    weight: kappa h, N/mm (energy per mm^2 of barrier).  triangles (F, 3, 3), edges (E, 2, 3): the
+    corners of the mesh primitives (mm) that STATION_TRIANGLE and SEGMENT_EDGE pairs index.  Also per pair: the force on the hose
     (N; for a self-contact pair, on the first segment), the closest points on the hose and on the
     other body (mm) and the gap (mm).
     """
@@ -274,8 +343,9 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, kinds
             on_other[p] = nodes[i] - (gap + hose_radius) * normal
             gaps[p] = gap
             continue
-        points, m, c, dc, free, node, radius = pair_geometry(kind, i, j, nodes, planes, balls, capsules)
+        points, m, c, dc, free, node, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges)
         d, d_x, d_xx = distance_terms(points, m, c, dc, free)
+        on_first = 1 if kind == STATION_TRIANGLE else 2  # the points of the (first) hose primitive
         other_radius = hose_radius if kind == SEGMENT_SEGMENT else radius
         gap = d - hose_radius - other_radius
         b, b1, b2 = barrier(gap, d_hat)
@@ -286,7 +356,7 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, kinds
                 continue
             for x in range(3):
                 grad[ka, x] += weight * b1 * d_x[3 * a + x]
-                if a < 2:
+                if a < on_first:
                     forces[p, x] -= weight * b1 * d_x[3 * a + x]
             for bb in range(m):
                 kb = node[bb]
@@ -297,8 +367,13 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, kinds
                         hess[ka, kb, x, y] += weight * (
                             b2 * d_x[3 * a + x] * d_x[3 * bb + y] + b1 * d_xx[3 * a + x, 3 * bb + y]
                         )
-        hose_point = c[0] * points[0] + c[1] * points[1]
-        axis_point = -(c[2] * points[2] + c[3] * points[3])  # on the other body's axis (or centre)
+        hose_point = np.zeros(3)
+        axis_point = np.zeros(3)  # on the other body's axis (or centre, or surface)
+        for a in range(m):
+            if a < on_first:
+                hose_point += c[a] * points[a]
+            else:
+                axis_point -= c[a] * points[a]
         on_hose[p] = hose_point
         on_other[p] = axis_point + other_radius / d * (hose_point - axis_point)
         gaps[p] = gap
@@ -370,10 +445,10 @@ def _skew_into(t, out):
 
 
 @njit(cache=True)
-def listed_gaps(nodes, hose_radius, planes, balls, capsules, kinds, first, second):
-    """The gap (mm, surface to surface) of each listed pair (as returned by pair_gaps)."""
+def listed_gaps(nodes, hose_radius, planes, balls, capsules, triangles, edges, kinds, first, second):
+    """The gap (mm, surface to surface) of each listed pair (as returned by pair_gaps or contact_mesh.mesh_pairs)."""
     gaps = np.empty(kinds.shape[0])
     for p in range(kinds.shape[0]):
-        d, radius = _pair_distance(kinds[p], first[p], second[p], nodes, planes, balls, capsules)
+        d, radius = _pair_distance(kinds[p], first[p], second[p], nodes, planes, balls, capsules, triangles, edges)
         gaps[p] = d - hose_radius - (hose_radius if kinds[p] == SEGMENT_SEGMENT else radius)
     return gaps

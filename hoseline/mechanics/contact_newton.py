@@ -34,16 +34,19 @@ from hoseline.mechanics.banded import NEUTRAL, band_to_dense, banded_matvec
 from hoseline.mechanics.clipped import unknown_layout
 from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
 from hoseline.mechanics.contact import (
+    MESH_KINDS,
     PAIR_KINDS,
     SEGMENT_BALL,
     SEGMENT_CAPSULE,
+    SEGMENT_EDGE,
     SEGMENT_SEGMENT,
-    STATION_PLANE,
+    STATION_KINDS,
     listed_gaps,
     node_terms,
     pair_gaps,
     rotation_terms,
 )
+from hoseline.mechanics.contact_mesh import MeshArrays, swept_edges_clear
 from hoseline.mechanics.contact_solve import (
     banded_step,
     dense_step,
@@ -55,6 +58,7 @@ from hoseline.mechanics.newton import NewtonReport, RodProperties, apply_step, e
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 
 SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
+SWEPT_EVALUATIONS = 256  # distances per segment-edge pair in the swept check of a step (contact_mesh.swept_edges_clear)
 
 
 _CONTROLLER: list[ThreadpoolController] = []
@@ -76,6 +80,7 @@ class ContactModel:
     push).  stiffness: barrier stiffness kappa, N/mm^2 (see docs/model.md, Contact).
     planes (P, 6): point, unit normal.  balls (S, 4): centre, radius.  capsules (C, 7): axis
     start, axis end, radius.  owners_*: index into `names` of each primitive's obstacle.
+    mesh: the triangle meshes and boxes (contact_mesh.MeshArrays, with their owners).
     self_exclusion: segments i < j can touch when j - i > self_exclusion; -1: no self-contact.
     """
 
@@ -88,19 +93,71 @@ class ContactModel:
     owners_planes: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     owners_balls: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     owners_capsules: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    mesh: MeshArrays = field(default_factory=MeshArrays)
     names: tuple[str, ...] = ()
     self_exclusion: int = -1
 
-    def pairs(self, nodes: np.ndarray, cutoff: float):
-        """(kinds, first, second, gaps) of every pair with a gap below `cutoff` mm (contact.pair_gaps)."""
-        return pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, self.self_exclusion, cutoff)
+    def pairs(self, nodes: np.ndarray, cutoff: float, *, meshes: bool = True):
+        """(kinds, first, second, gaps) of every pair with a gap below `cutoff` mm (contact.pair_gaps); the mesh pairs
+        (contact_mesh.mesh_pairs) only below the smaller of `cutoff` and d_hat (the barrier's: a mesh has too many
+        to list them all), none without `meshes`."""
+        found = pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, self.self_exclusion, cutoff)
+        if not meshes or self.mesh.count == 0:
+            return found
+        on_meshes = self.mesh.pairs(nodes, self.hose_radius, min(cutoff, self.activation))
+        return tuple(np.concatenate([a, b]) for a, b in zip(found, on_meshes))
+
+    def terms(self, nodes: np.ndarray, weight: float, kinds, first, second):
+        """contact.node_terms of the pairs (kinds, first, second) with this model's obstacles; weight: kappa h, N/mm."""
+        return node_terms(nodes, self.hose_radius, weight, self.activation, self.planes, self.balls, self.capsules,
+                          self.mesh.triangles, self.mesh.edges, kinds, first, second)
 
     def owner(self, kind: int, second: int) -> str:
         """Name of the obstacle of a pair ("self" for self-contact)."""
         if kind == SEGMENT_SEGMENT:
             return "self"
+        if kind in MESH_KINDS:
+            return self.names[self.mesh.owner(kind, second)]
         owners = (self.owners_planes, self.owners_balls, self.owners_capsules)[kind]
         return self.names[int(owners[second])]
+
+    def penetration(self, nodes: np.ndarray) -> str | None:
+        """What the hose with centreline `nodes` (mm) is inside or touching, where and by how much; None if it clears all."""
+        kinds, first, second, gaps = self.pairs(nodes, 0.0, meshes=False)
+        if kinds.size:
+            worst = int(np.argmin(gaps))
+            return penetration_message(self, kinds[worst], first[worst], second[worst], gaps[worst])
+        if self.mesh.count:
+            mesh_gaps, nearest = self.mesh.segment_gaps(nodes[:-1], nodes[1:], self.hose_radius, 0.0)
+            if np.any(nearest >= 0):
+                mesh, segment = np.unravel_index(int(np.argmin(mesh_gaps)), mesh_gaps.shape)
+                return (f"the hose is inside obstacle {self.names[int(self.mesh.owners[mesh])]!r} at segment {segment} "
+                        f"by {-mesh_gaps[mesh, segment]:.4g} mm (segment-triangle)")
+        return None
+
+    def smallest_gaps(self, nodes: np.ndarray) -> dict[str, float]:
+        """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to each obstacle (and "self")."""
+        smallest = {name: math.inf for name in self.names} | ({"self": math.inf} if self.self_exclusion >= 0 else {})
+        (kinds, second, gaps), mesh_gaps = self._all_gaps(nodes)
+        for kind, j, gap in zip(kinds, second, gaps):
+            name = self.owner(kind, j)
+            smallest[name] = min(smallest[name], float(gap))
+        for mesh in range(self.mesh.count):
+            name = self.names[int(self.mesh.owners[mesh])]
+            smallest[name] = min(smallest[name], float(np.min(mesh_gaps[mesh])))
+        return smallest
+
+    def smallest_gap(self, nodes: np.ndarray) -> float:
+        """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to anything it may touch."""
+        (_, _, gaps), mesh_gaps = self._all_gaps(nodes)
+        return float(min(np.min(gaps, initial=math.inf), np.min(mesh_gaps, initial=math.inf)))
+
+    def _all_gaps(self, nodes: np.ndarray):
+        """((kinds, second, gaps) of every analytic and self pair, the (K, N) gaps of each segment to each mesh)."""
+        kinds, _, second, gaps = self.pairs(nodes, math.inf, meshes=False)
+        mesh_gaps = (self.mesh.segment_gaps(nodes[:-1], nodes[1:], self.hose_radius, math.inf)[0] if self.mesh.count
+                     else np.zeros((0, nodes.shape[0] - 1)))
+        return (kinds, second, gaps), mesh_gaps
 
 
 def self_exclusion(hose_radius: float, segment_length: float) -> int:
@@ -158,9 +215,7 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
     nodes = centerline(state.frames, clamps.start_point, h)
     kinds, first, second, _ = model.pairs(nodes, model.activation)
     weight = model.stiffness * h
-    energy, node_grad, node_hess, forces, on_hose, on_other, gaps = node_terms(
-        nodes, model.hose_radius, weight, model.activation, model.planes, model.balls, model.capsules, kinds, first, second
-    )
+    energy, node_grad, node_hess, forces, on_hose, on_other, gaps = model.terms(nodes, weight, kinds, first, second)
     grad = base.grad.copy()
     band = base.band.copy()
     columns, signs, index = np.zeros((grad.size, 0)), np.zeros(0), None
@@ -210,34 +265,71 @@ class StepFilter:
     plane).  A trial state is accepted only if every watched gap stays above SAFE_FRACTION of its
     value (`admits`); as a primitive cannot cross a body without ending inside it or passing
     through it, no accepted step crosses into penetration.
+    Meshes are surfaces, not bodies (contact_mesh.py, step filter): the whole path of every station
+    and of every segment near an edge must stay clear by SAFE_FRACTION of its gap now.  swept: (the
+    stations now (N+1, 3) mm, their gaps to the meshes (N+1,) mm, inf where out of reach, the bound
+    (N+1,) mm of each station path's distance from its chord for the whole step, and the
+    segment-edge pairs within reach (segments, edges, gaps mm)), or None without meshes.
     """
 
     pairs: tuple
     gaps: np.ndarray
     limit: float
+    swept: tuple | None = None
 
-    def admits(self, props: RodProperties, clamps: Clamps, trial: RodState, model: ContactModel) -> bool:
-        """Whether the trial state keeps every watched gap above SAFE_FRACTION of its value."""
+    def admits(self, props: RodProperties, clamps: Clamps, trial: RodState, model: ContactModel, alpha: float) -> bool:
+        """Whether the trial state, `alpha` times the step, keeps every watched gap above SAFE_FRACTION of its value."""
+        nodes = centerline(trial.frames, clamps.start_point, props.segment_length)
+        if self.swept is not None and not self._paths_clear(nodes, model, alpha):
+            return False
         if self.gaps.size == 0:
             return True
-        nodes = centerline(trial.frames, clamps.start_point, props.segment_length)
         kinds, first, second = self.pairs
-        gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, kinds, first, second)
+        gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, model.mesh.triangles,
+                           model.mesh.edges, kinds, first, second)
         return bool(np.all(gaps > SAFE_FRACTION * self.gaps))
+
+    def _paths_clear(self, nodes: np.ndarray, model: ContactModel, alpha: float) -> bool:
+        """Whether every station and every segment near a mesh edge stays clear of the meshes along its path, by
+        SAFE_FRACTION of its gap now.
+
+        The path of station k lies within alpha^2 bend_k of its chord (contact_mesh.py), so its gap along the
+        step is at least the chord's gap less that; a segment's points within alpha^2 bend of the segment
+        carried along its ends' chords (contact_mesh.swept_edges_clear)."""
+        start, gaps, bend, (segments, edges, edge_gaps) = self.swept
+        near = np.isfinite(gaps)
+        if np.any(near):
+            chord_gaps = np.min(model.mesh.segment_gaps(start[near], nodes[near], model.hose_radius, math.inf)[0],
+                                axis=0)
+            if not np.all(chord_gaps - alpha * alpha * bend[near] > SAFE_FRACTION * gaps[near]):
+                return False
+        clearances = model.hose_radius + SAFE_FRACTION * edge_gaps + alpha * alpha * bend[segments + 1]
+        return bool(swept_edges_clear(start, nodes, segments, edges, model.mesh.edges, clearances, SWEPT_EVALUATIONS))
 
 
 def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, model: ContactModel) -> StepFilter:
     """The StepFilter of `step` from `state` (see StepFilter)."""
     h = props.segment_length
     index = rotation_index(props, clamps, state)
-    rotations = step[index[:, None] + np.arange(3)[None, :]]
-    reach = np.concatenate([[0.0], h * np.cumsum(np.linalg.norm(rotations, axis=1))])  # bound of station k's move
+    turns = np.linalg.norm(step[index[:, None] + np.arange(3)[None, :]], axis=1)
+    reach = np.concatenate([[0.0], h * np.cumsum(turns)])  # bound of station k's move
     nodes = centerline(state.frames, clamps.start_point, h)
-    kinds, first, second, gaps = model.pairs(nodes, float(reach[-1]) + model.activation)
+    cutoff = float(reach[-1]) + model.activation
+    kinds, first, second, gaps = model.pairs(nodes, cutoff, meshes=False)
+    swept = None
+    if model.mesh.count:
+        station_cutoffs, segment_cutoffs = reach + model.activation, reach[1:] + model.activation
+        mesh_kinds, segments, edges, edge_gaps = model.mesh.pairs(nodes, model.hose_radius,
+                                                                  (np.zeros_like(reach), segment_cutoffs), every_feature=True)
+        on_edges = mesh_kinds == SEGMENT_EDGE
+        station_gaps = np.min(model.mesh.segment_gaps(nodes, nodes, model.hose_radius, cutoff)[0], axis=0)
+        station_gaps[station_gaps >= station_cutoffs] = math.inf  # out of reach
+        bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
+        swept = (nodes, station_gaps, bend, (segments[on_edges], edges[on_edges], edge_gaps[on_edges]))
     if kinds.size == 0:
-        return StepFilter((kinds, first, second), gaps, 1.0)
+        return StepFilter((kinds, first, second), gaps, 1.0, swept)
     last = props.segments
-    bound = np.where(kinds == STATION_PLANE, reach[first], reach[np.minimum(first + 1, last)])
+    bound = np.where(np.isin(kinds, STATION_KINDS), reach[first], reach[np.minimum(first + 1, last)])
     bound = bound + np.where(kinds == SEGMENT_SEGMENT, reach[np.minimum(second + 1, last)], 0.0)
     thickness = np.full(kinds.size, np.inf)
     thickness[kinds == SEGMENT_SEGMENT] = 2.0 * model.hose_radius
@@ -246,7 +338,7 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
     thickness[capsules] = 2.0 * model.capsules[second[capsules], 6]
     with np.errstate(divide="ignore", invalid="ignore"):
         fractions = np.where(bound > 0.0, (gaps + thickness) / bound, np.inf)
-    return StepFilter((kinds, first, second), gaps, float(min(1.0, np.min(fractions))))
+    return StepFilter((kinds, first, second), gaps, float(min(1.0, np.min(fractions))), swept)
 
 
 def solve_with_contact(
@@ -273,12 +365,9 @@ def solve_with_contact(
 
 def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
     """solve_with_contact without the thread limit."""
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    kinds, first, second, gaps = model.pairs(nodes, 0.0)
-    if kinds.size:
-        worst = int(np.argmin(gaps))
-        return state, NewtonReport(False, 0, math.inf, -1, penetration_message(model, kinds[worst], first[worst],
-                                                                                second[worst], gaps[worst]))
+    inside = model.penetration(centerline(state.frames, clamps.start_point, props.segment_length))
+    if inside is not None:
+        return state, NewtonReport(False, 0, math.inf, -1, inside)
     system = evaluate_contact(props, clamps, state, model)
     unstable = -1
     for iteration in range(max_iterations + 1):
@@ -296,7 +385,7 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
         accepted = None
         for _ in range(30):
             trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
-            if not watch.admits(props, clamps, trial, model):
+            if not watch.admits(props, clamps, trial, model, alpha):
                 alpha *= 0.5
                 continue
             trial_system = evaluate_contact(props, clamps, trial, model)
@@ -381,7 +470,7 @@ def _leave_saddle(props, clamps, state, system, model, turns=(0.05, 0.2, 0.8)):
             watch = step_filter(props, clamps, state, step, model)
             alpha = watch.limit
             trial = _onto_constraints(props, clamps, apply_step(props, clamps, state, alpha * step, np.zeros(3)))
-            while not watch.admits(props, clamps, trial, model):
+            while not watch.admits(props, clamps, trial, model, alpha):
                 alpha *= 0.5
                 trial = _onto_constraints(props, clamps, apply_step(props, clamps, state, alpha * step, np.zeros(3)))
             trial_system = evaluate_contact(props, clamps, trial, model)
@@ -408,12 +497,9 @@ def _onto_constraints(props: RodProperties, clamps: Clamps, state: RodState, cor
 
 def _minimise_with_contact(props, clamps, state, model, tolerance, max_iterations):
     """minimise_with_contact without the thread limit (the loop of newton._minimise_kernel, with the step filter)."""
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    kinds, first, second, gaps = model.pairs(nodes, 0.0)
-    if kinds.size:
-        worst = int(np.argmin(gaps))
-        return state, NewtonReport(False, 0, math.inf, -1, penetration_message(model, kinds[worst], first[worst],
-                                                                                second[worst], gaps[worst]))
+    inside = model.penetration(centerline(state.frames, clamps.start_point, props.segment_length))
+    if inside is not None:
+        return state, NewtonReport(False, 0, math.inf, -1, inside)
     system = evaluate_contact(props, clamps, state, model)
     diag_scale = float(np.max(np.abs(system.band[:, 0])))
     sigma_floor = 1e-10 * diag_scale
@@ -449,7 +535,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
             watch = step_filter(props, clamps, state, step, model)
             alpha = watch.limit
             trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
-            while not watch.admits(props, clamps, trial, model) and alpha > 1e-9:
+            while not watch.admits(props, clamps, trial, model, alpha) and alpha > 1e-9:
                 alpha *= 0.5
                 trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
             trial_system = evaluate_contact(props, clamps, trial, model)
@@ -486,7 +572,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
 
 def penetration_message(model: ContactModel, kind: int, first: int, second: int, gap: float) -> str:
     """Which obstacle the hose is inside, where (station or segment) and by how much."""
-    where = f"station {first}" if kind == STATION_PLANE else f"segment {first}"
+    where = f"station {first}" if kind in STATION_KINDS else f"segment {first}"
     if kind == SEGMENT_SEGMENT:
         return f"the hose cuts into itself: segments {first} and {second} overlap by {-gap:.4g} mm"
     return f"the hose is inside obstacle {model.owner(kind, second)!r} at {where} by {-gap:.4g} mm ({PAIR_KINDS[kind]})"
@@ -494,6 +580,4 @@ def penetration_message(model: ContactModel, kind: int, first: int, second: int,
 
 def minimum_gap(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:
     """The smallest gap (mm, surface to surface) over every pair: the hose's clearance to all it may touch."""
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    _, _, _, gaps = model.pairs(nodes, math.inf)
-    return float(np.min(gaps)) if gaps.size else math.inf
+    return model.smallest_gap(centerline(state.frames, clamps.start_point, props.segment_length))

@@ -41,7 +41,7 @@ import scipy.linalg.lapack as lapack
 from numba import njit
 
 from hoseline.mechanics.banded import NEUTRAL, banded_matvec, count_negative, ldlt_banded
-from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_PLANE
+from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_PLANE, STATION_TRIANGLE
 
 DROPPED = 1e-13  # eigenvalues of a group's station Hessian below this fraction of its largest are rounding
 BACKWARD_ERROR = 1e-9  # a banded solve with a larger relative residual is redone dense
@@ -64,7 +64,7 @@ def station_groups(kinds, first, second, stations):
     active = np.zeros(stations, np.bool_)
     members = np.empty(4, np.int64)
     for p in range(kinds.shape[0]):
-        if kinds[p] == STATION_PLANE:
+        if kinds[p] == STATION_PLANE or kinds[p] == STATION_TRIANGLE:
             members[0] = first[p]
             count = 1
         else:

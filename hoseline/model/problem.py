@@ -33,7 +33,7 @@ class Problem:
     clips: intermediate supports (model/clips.py), in order of arc length; each on a station of the hose.
     fittings: the ports and rigid end fittings (model/fittings.py) when the user gave them; start and end
         are then the fitting outlets (what the solver clamps) and hose.length is the free length.
-    contact: obstacles the hose touches without entering (model/obstacles.py: plane, sphere, cylinder; mm),
+    contact: obstacles the hose touches without entering (model/obstacles.py: plane, sphere, cylinder, box, mesh; mm),
         frictionless; each with its own name.
     self_contact: keep the hose out of itself (segments far enough apart along it).
     """

@@ -17,8 +17,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from hoseline.mechanics.contact_mesh import pack_meshes
 from hoseline.mechanics.contact_newton import ContactModel, self_exclusion
-from hoseline.model.obstacles import Cylinder, Obstacle, Plane, Sphere
+from hoseline.model.obstacles import Box, Cylinder, Mesh, Obstacle, Plane, Sphere
 
 DEFAULT_ACTIVATION = 0.01  # mm: d_hat, the largest gap at which contact pushes (the accuracy of a touch)
 
@@ -29,7 +30,10 @@ def reference_pressure(weight_per_length: float, bending_stiffness: float, lengt
 
 
 def bend_length(hose_length: float, obstacles: Sequence[Obstacle], hose_radius: float) -> float:
-    """l, mm: the shortest of the hose length and R + r over the round obstacles (spheres, cylinders)."""
+    """l, mm: the shortest of the hose length and R + r over the round obstacles (spheres, cylinders).
+
+    Boxes and meshes do not shorten it: their edges are sharp (R = 0), and a hose pressed over an
+    edge is bent over the length between its supports, not over the edge's radius."""
     radii = [obstacle.radius + hose_radius for obstacle in obstacles if isinstance(obstacle, (Sphere, Cylinder))]
     return float(min([hose_length, *radii]))
 
@@ -50,8 +54,8 @@ def contact_model(
     """
     if not activation > 0.0:
         raise ValueError(f"contact activation distance = {activation!r}: must be a positive distance in mm")
-    planes, balls, capsules = [], [], []
-    owners: tuple[list[int], list[int], list[int]] = ([], [], [])
+    planes, balls, capsules, meshes = [], [], [], []
+    owners: tuple[list[int], list[int], list[int], list[int]] = ([], [], [], [])
     for index, obstacle in enumerate(obstacles):
         if isinstance(obstacle, Plane):
             planes.append(np.concatenate([obstacle.point, obstacle.normal]))
@@ -62,6 +66,9 @@ def contact_model(
         elif isinstance(obstacle, Cylinder):
             capsules.append(np.concatenate([obstacle.start, obstacle.end, [obstacle.radius]]))
             owners[2].append(index)
+        elif isinstance(obstacle, (Box, Mesh)):
+            meshes.append(obstacle.triangles())
+            owners[3].append(index)
         else:
             raise TypeError(f"obstacle {index}: {type(obstacle).__name__} is not a contact obstacle")
     return ContactModel(
@@ -74,6 +81,8 @@ def contact_model(
         owners_planes=np.array(owners[0], dtype=np.int64),
         owners_balls=np.array(owners[1], dtype=np.int64),
         owners_capsules=np.array(owners[2], dtype=np.int64),
+        mesh=pack_meshes(meshes, owners[3]),
         names=tuple(obstacle.name for obstacle in obstacles),
         self_exclusion=self_exclusion(hose_radius, segment_length) if self_contact else -1,
     )
+

@@ -17,11 +17,10 @@ import scipy.linalg
 
 from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.banded import NEUTRAL
-from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_PLANE, node_terms
-from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact, penetration_message
+from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_KINDS
+from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
-from hoseline.model.obstacles import Cylinder, Plane, Sphere
 from hoseline.model.problem import Problem
 from hoseline.procedures.contact.model import bend_length, contact_model, reference_pressure
 from hoseline.procedures.placement.continuation import PlacementError
@@ -46,20 +45,17 @@ def problem_contact_model(problem: Problem) -> ContactModel:
 
 def is_clear(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> bool:
     """Whether `state` keeps a positive gap to every obstacle (and itself, with self-contact)."""
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    return model.pairs(nodes, 0.0)[0].size == 0
+    return model.penetration(centerline(state.frames, clamps.start_point, props.segment_length)) is None
 
 
 def check_clear(where: str, props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> None:
     """Raise PlacementError naming the obstacle, the station or segment and the depth if `state` touches or
     enters anything; where: what the state is, for the message (e.g. "the straight hose the placement starts from")."""
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    kinds, first, second, gaps = model.pairs(nodes, 0.0)
-    if kinds.size == 0:
+    inside = model.penetration(centerline(state.frames, clamps.start_point, props.segment_length))
+    if inside is None:
         return
-    worst = int(np.argmin(gaps))
     raise PlacementError(
-        f"placement with contact: {where} is not clear: {penetration_message(model, kinds[worst], first[worst], second[worst], gaps[worst])}. "
+        f"placement with contact: {where} is not clear: {inside}. "
         "The placement carries the hose from a straight line out of the start fitting (along start.direction, the "
         "hose length long) to the end fitting, and needs that start clear of every obstacle: move or shorten the "
         "obstacle so that it does not meet that line, or remove it from [contact]")
@@ -70,54 +66,45 @@ def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, stat
     """One ObstacleContact per obstacle of the problem (and "self" with self-contact) at `state` (mm, N)."""
     h = props.segment_length
     nodes = centerline(state.frames, clamps.start_point, h)
-    kinds, first, second, gaps = model.pairs(nodes, math.inf)
-    active = gaps < model.activation
-    forces, on_hose, on_other, active_gaps = node_terms(
-        nodes, model.hose_radius, model.stiffness * h, model.activation, model.planes, model.balls, model.capsules,
-        kinds[active], first[active], second[active])[3:]
-    owners = np.array([model.owner(kind, j) for kind, j in zip(kinds, second)], dtype=object)
-    active_owners = owners[active]
-    a_kinds, a_first, a_second = kinds[active], first[active], second[active]
-    arc = np.where(a_kinds == STATION_PLANE, a_first * h,
+    a_kinds, a_first, a_second, _ = model.pairs(nodes, model.activation)
+    forces, on_hose, on_other, active_gaps = model.terms(nodes, model.stiffness * h, a_kinds, a_first, a_second)[3:]
+    active_owners = np.array([model.owner(kind, j) for kind, j in zip(a_kinds, a_second)], dtype=object)
+    arc = np.where(np.isin(a_kinds, STATION_KINDS), a_first * h,
                    a_first * h + np.linalg.norm(on_hose - nodes[np.minimum(a_first, props.segments)], axis=1))
+    smallest = model.smallest_gaps(nodes)
     names = [obstacle.name for obstacle in problem.contact] + (["self"] if problem.self_contact else [])
-    kind_of = {obstacle.name: _kind(obstacle) for obstacle in problem.contact} | {"self": "self"}
+    kind_of = {obstacle.name: obstacle.kind for obstacle in problem.contact} | {"self": "self"}
     reports = []
     for name in names:
         mine = active_owners == name
-        where = np.flatnonzero(owners == name)
-        touching = set(a_first[mine].tolist())
+        at_stations = np.isin(a_kinds[mine], STATION_KINDS)  # a mesh touches stations and segments: count each once
+        touching = set(zip(at_stations.tolist(), a_first[mine].tolist()))
         if name == "self":
-            touching |= set(a_second[mine].tolist())
+            touching |= set(zip(at_stations.tolist(), a_second[mine].tolist()))
         order = np.argsort(arc[mine], kind="stable")
         force = forces[mine][order]
         reports.append(ObstacleContact(
-            name=name, kind=kind_of[name], min_gap=float(np.min(gaps[where])) if where.size else math.inf,
+            name=name, kind=kind_of[name], min_gap=smallest[name],
             arc_length=arc[mine][order], point=on_hose[mine][order], surface_point=on_other[mine][order],
             gap=active_gaps[mine][order], force=force, total_force=force.sum(axis=0),
             length_in_contact=h * len(touching)))
     return reports
 
 
-def _kind(obstacle) -> str:
-    return {Plane: "plane", Sphere: "sphere", Cylinder: "cylinder"}[type(obstacle)]
-
-
 def contact_forces_beyond(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> np.ndarray:
     """(N+1, 3) N: the sum of the contact forces on the part of the hose beyond each station.
 
-    A station-plane force at station k acts beyond the stations before k; a segment's force (on segment
+    A station's force (station-plane, station-triangle) at station k acts beyond the stations before k; a segment's force (on segment
     i, between stations i and i + 1) beyond stations 0..i; a self-contact pair pushes its first segment
     and pulls the second the other way."""
     h = props.segment_length
     nodes = centerline(state.frames, clamps.start_point, h)
     kinds, first, second, _ = model.pairs(nodes, model.activation)
-    forces = node_terms(nodes, model.hose_radius, model.stiffness * h, model.activation, model.planes, model.balls,
-                        model.capsules, kinds, first, second)[3]
+    forces = model.terms(nodes, model.stiffness * h, kinds, first, second)[3]
     beyond = np.zeros((props.segments + 1, 3))
     stations = np.arange(props.segments + 1)
     for kind, i, j, force in zip(kinds, first, second, forces):
-        beyond[stations < i if kind == STATION_PLANE else stations <= i] += force
+        beyond[stations < i if kind in STATION_KINDS else stations <= i] += force
         if kind == SEGMENT_SEGMENT:
             beyond[stations <= j] -= force
     return beyond

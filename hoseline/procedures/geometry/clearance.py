@@ -20,10 +20,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numba import njit
 
-from hoseline.procedures.geometry.proximity import segment_plane_gap, segment_triangle_distance
-
-LEAF_SIZE = 4
-STACK_SIZE = 256  # far above the depth of a median-split tree (about log2(triangles / LEAF_SIZE))
+from hoseline.mechanics.bounding_volumes import LEAF_SIZE, STACK_SIZE, build_tree, corners_of, point_of, segment_search
+from hoseline.mechanics.proximity import segment_triangle_distance
 
 
 @dataclass(frozen=True)
@@ -57,7 +55,7 @@ class TriangleIndex:
         if faces.ndim != 2 or faces.shape[1] != 3 or faces.shape[0] == 0:
             raise ValueError(f"a triangle mesh needs faces of shape (F, 3) with F > 0, got {faces.shape}")
         corners = vertices[faces]  # (F, 3 corners, 3 coordinates)
-        self.order, self.lower, self.upper, self.children, self.ranges = _build(
+        self.order, self.lower, self.upper, self.children, self.ranges = build_tree(
             corners.min(axis=1), corners.max(axis=1), corners.mean(axis=1), LEAF_SIZE
         )
         self.triangles = np.ascontiguousarray(corners[self.order])
@@ -116,119 +114,6 @@ def _polyline_length(points: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def _build(tri_lower, tri_upper, centroids, leaf_size):
-    """Top-down median split on the longest axis of the centroids' box.
-
-    Returns (order, lower, upper, children, ranges): the triangles in tree order; per node its
-    box corners (M, 3), children (M, 2) (-1 for a leaf) and its range [first, first + count)
-    in tree order (M, 2).
-    """
-    count = tri_lower.shape[0]
-    capacity = 2 * count  # a binary tree with at least one triangle per leaf has fewer nodes
-    order = np.arange(count)
-    lower = np.empty((capacity, 3))
-    upper = np.empty((capacity, 3))
-    children = -np.ones((capacity, 2), dtype=np.int64)
-    ranges = np.zeros((capacity, 2), dtype=np.int64)
-    stack = [(0, 0, count)]
-    used = 1
-    while len(stack) > 0:
-        node, first, end = stack.pop()
-        members = order[first:end]
-        for k in range(3):
-            lower[node, k] = tri_lower[members, k].min()
-            upper[node, k] = tri_upper[members, k].max()
-        ranges[node, 0] = first
-        ranges[node, 1] = end - first
-        if end - first <= leaf_size:
-            continue
-        spread = np.empty(3)
-        for k in range(3):
-            spread[k] = centroids[members, k].max() - centroids[members, k].min()
-        axis = int(np.argmax(spread))
-        order[first:end] = members[np.argsort(centroids[members, axis], kind="mergesort")]
-        middle = (first + end) // 2
-        children[node, 0] = used
-        children[node, 1] = used + 1
-        stack.append((used, first, middle))
-        stack.append((used + 1, middle, end))
-        used += 2
-    return order, lower[:used].copy(), upper[:used].copy(), children[:used].copy(), ranges[:used].copy()
-
-
-@njit(cache=True, inline="always")
-def _point(points, i):
-    """Row i of an (n, 3) array as a tuple."""
-    return (points[i, 0], points[i, 1], points[i, 2])
-
-
-@njit(cache=True, inline="always")
-def _corners(triangles, t):
-    """The three corners of triangle t of an (F, 3, 3) array, as tuples."""
-    return _point(triangles[t], 0), _point(triangles[t], 1), _point(triangles[t], 2)
-
-
-@njit(cache=True)
-def _box_gap(p, q, lower, upper):
-    """A lower bound (mm) of the distance from segment pq to an axis-aligned box.
-
-    The larger of: the gap between the box and the segment's own box, and the distance from
-    the box to the segment's midpoint less half the segment's length.
-    """
-    boxes = 0.0
-    ball = 0.0
-    half = 0.0
-    for k in range(3):
-        low, high = min(p[k], q[k]), max(p[k], q[k])
-        middle = 0.5 * (low + high)
-        half += (high - low) ** 2
-        if high < lower[k]:
-            boxes += (lower[k] - high) ** 2
-        elif low > upper[k]:
-            boxes += (low - upper[k]) ** 2
-        if middle < lower[k]:
-            ball += (lower[k] - middle) ** 2
-        elif middle > upper[k]:
-            ball += (middle - upper[k]) ** 2
-    return max(math.sqrt(boxes), math.sqrt(ball) - 0.5 * math.sqrt(half))
-
-
-@njit(cache=True, inline="always")
-def segment_search(p, q, bound, triangles, normals, lower, upper, children, ranges, stack):
-    """Branch and bound over the tree for the segment pq, looking for something nearer than `bound` (mm).
-
-    stack: scratch space of STACK_SIZE ints.  Returns (distance, position, on_segment, on_triangle):
-    the centreline distance and the triangle's position in tree order when one is nearer than
-    `bound`; else (bound, -1, p, p).
-    """
-    best, best_position, on_segment, on_triangle = bound, -1, p, p
-    stack[0] = 0
-    top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        if _box_gap(p, q, lower[node], upper[node]) >= best:
-            continue
-        if children[node, 0] < 0:
-            first, count = ranges[node, 0], ranges[node, 1]
-            for position in range(first, first + count):
-                a, b, c = _corners(triangles, position)
-                if segment_plane_gap(p, q, a, _point(normals, position)) >= best:
-                    continue
-                d, x, y = segment_triangle_distance(p, q, a, b, c)
-                if d < best:
-                    best, best_position, on_segment, on_triangle = d, position, x, y
-            continue
-        left, right = children[node, 0], children[node, 1]
-        if _box_gap(p, q, lower[left], upper[left]) <= _box_gap(p, q, lower[right], upper[right]):
-            stack[top], stack[top + 1] = right, left  # the nearer child is opened first
-        else:
-            stack[top], stack[top + 1] = left, right
-        top += 2
-    return best, best_position, on_segment, on_triangle
-
-
-@njit(cache=True)
 def _nearest(nodes, triangles, normals, lower, upper, children, ranges, hint):
     """Branch and bound over the tree for every segment of the chain `nodes`.
 
@@ -239,12 +124,12 @@ def _nearest(nodes, triangles, normals, lower, upper, children, ranges, hint):
     best = math.inf
     best_segment = 0
     best_position = hint
-    on_hose = _point(nodes, 0)
-    on_obstacle = _point(triangles[hint], 0)
+    on_hose = point_of(nodes, 0)
+    on_obstacle = point_of(triangles[hint], 0)
     # a first bound: the last nearest triangle against the whole chain
-    a, b, c = _corners(triangles, hint)
+    a, b, c = corners_of(triangles, hint)
     for i in range(n_seg):
-        d, x, y = segment_triangle_distance(_point(nodes, i), _point(nodes, i + 1), a, b, c)
+        d, x, y = segment_triangle_distance(point_of(nodes, i), point_of(nodes, i + 1), a, b, c)
         if d < best:
             best, best_segment, on_hose, on_obstacle = d, i, x, y
     start = best_segment
@@ -252,7 +137,7 @@ def _nearest(nodes, triangles, normals, lower, upper, children, ranges, hint):
     for k in range(n_seg):
         i = (start + k) % n_seg  # begin where the hose was nearest: tightens the bound early
         d, position, x, y = segment_search(
-            _point(nodes, i), _point(nodes, i + 1), best, triangles, normals, lower, upper, children, ranges, stack
+            point_of(nodes, i), point_of(nodes, i + 1), best, triangles, normals, lower, upper, children, ranges, 0, stack
         )
         if d < best:
             best, best_segment, best_position, on_hose, on_obstacle = d, i, position, x, y

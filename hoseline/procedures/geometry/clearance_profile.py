@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hoseline.procedures.geometry.clearance import STACK_SIZE, TriangleIndex, segment_search
+from hoseline.mechanics.bounding_volumes import STACK_SIZE, segment_search
+from hoseline.procedures.geometry.clearance import TriangleIndex
 
 
 def clearance_profile(index: TriangleIndex, nodes: np.ndarray, outer_radius: float, cutoff: float) -> np.ndarray:
@@ -38,5 +39,5 @@ def _segment_distances(nodes, triangles, normals, lower, upper, children, ranges
     for i in range(n_seg):
         p = (nodes[i, 0], nodes[i, 1], nodes[i, 2])
         q = (nodes[i + 1, 0], nodes[i + 1, 1], nodes[i + 1, 2])
-        out[i] = segment_search(p, q, cutoff, triangles, normals, lower, upper, children, ranges, stack)[0]
+        out[i] = segment_search(p, q, cutoff, triangles, normals, lower, upper, children, ranges, 0, stack)[0]
     return out

@@ -74,14 +74,15 @@ class ClipReaction:
 class ObstacleContact:
     """Where and how hard the hose presses on one obstacle (or on itself, name "self") at equilibrium.
 
-    name, kind: as in the problem ("plane", "sphere", "cylinder"; "self" for self-contact).
+    name, kind: as in the problem ("plane", "sphere", "cylinder", "box", "mesh"; "self" for self-contact).
     min_gap: smallest gap between the hose surface and the obstacle, mm (>= 0; inf if never near).
     One row per contact pair (gap below the barrier's activation distance, see docs/model.md Contact):
     arc_length (k,) mm of the hose point from the start fitting; point (k, 3) mm on the hose's
     centreline; surface_point (k, 3) mm on the obstacle's surface; gap (k,) mm; force (k, 3) N, the
     obstacle's push on the hose (for self-contact, on the first pass: the second gets its opposite).
-    total_force: (3,) N, the sum.  length_in_contact: mm, h times the stations (plane) or segments
-    touching (a count at the resolution of the stations, see docs/model.md Contact).
+    total_force: (3,) N, the sum.  length_in_contact: mm, h times the stations (plane; a box's or
+    mesh's faces) and segments (round obstacles; a box's or mesh's edges) touching (a count at the
+    resolution of the stations, see docs/model.md Contact).
     """
 
     name: str

@@ -1,0 +1,158 @@
+"""A bounding-volume hierarchy (axis-aligned boxes, median split) and its searches (compiled).
+
+Used by the clearance search (procedures/geometry/clearance.py: the nearest triangle of an
+obstacle mesh) and by contact with meshes (mechanics/contact_mesh.py: the triangles and edges
+within reach of each station or segment).  A box is opened only if it can hold something
+nearer than the bound (box_gap is a lower bound of the distance to anything inside it), so a
+search costs about log2(items) boxes per query instead of a loop over every item.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from hoseline.mechanics.proximity import segment_plane_gap, segment_triangle_distance
+
+LEAF_SIZE = 4
+STACK_SIZE = 256  # far above the depth of a median-split tree (about log2(items / LEAF_SIZE))
+
+
+@njit(cache=True)
+def build_tree(item_lower, item_upper, centroids, leaf_size):
+    """Top-down median split on the longest axis of the centroids' box, over items given by their boxes.
+
+    item_lower, item_upper, centroids: (F, 3) mm per item (a triangle, an edge).
+    Returns (order, lower, upper, children, ranges): the items in tree order; per node its
+    box corners (M, 3), children (M, 2) (-1 for a leaf) and its range [first, first + count)
+    in tree order (M, 2).
+    """
+    count = item_lower.shape[0]
+    capacity = 2 * count  # a binary tree with at least one triangle per leaf has fewer nodes
+    order = np.arange(count)
+    lower = np.empty((capacity, 3))
+    upper = np.empty((capacity, 3))
+    children = -np.ones((capacity, 2), dtype=np.int64)
+    ranges = np.zeros((capacity, 2), dtype=np.int64)
+    stack = [(0, 0, count)]
+    used = 1
+    while len(stack) > 0:
+        node, first, end = stack.pop()
+        members = order[first:end]
+        for k in range(3):
+            lower[node, k] = item_lower[members, k].min()
+            upper[node, k] = item_upper[members, k].max()
+        ranges[node, 0] = first
+        ranges[node, 1] = end - first
+        if end - first <= leaf_size:
+            continue
+        spread = np.empty(3)
+        for k in range(3):
+            spread[k] = centroids[members, k].max() - centroids[members, k].min()
+        axis = int(np.argmax(spread))
+        order[first:end] = members[np.argsort(centroids[members, axis], kind="mergesort")]
+        middle = (first + end) // 2
+        children[node, 0] = used
+        children[node, 1] = used + 1
+        stack.append((used, first, middle))
+        stack.append((used + 1, middle, end))
+        used += 2
+    return order, lower[:used].copy(), upper[:used].copy(), children[:used].copy(), ranges[:used].copy()
+
+
+@njit(cache=True, inline="always")
+def point_of(points, i):
+    """Row i of an (n, 3) array as a tuple."""
+    return (points[i, 0], points[i, 1], points[i, 2])
+
+
+@njit(cache=True, inline="always")
+def corners_of(triangles, t):
+    """The three corners of triangle t of an (F, 3, 3) array, as tuples."""
+    return point_of(triangles[t], 0), point_of(triangles[t], 1), point_of(triangles[t], 2)
+
+
+@njit(cache=True)
+def box_gap(p, q, lower, upper):
+    """A lower bound (mm) of the distance from segment pq to an axis-aligned box.
+
+    The larger of: the gap between the box and the segment's own box, and the distance from
+    the box to the segment's midpoint less half the segment's length.
+    """
+    boxes = 0.0
+    ball = 0.0
+    half = 0.0
+    for k in range(3):
+        low, high = min(p[k], q[k]), max(p[k], q[k])
+        middle = 0.5 * (low + high)
+        half += (high - low) ** 2
+        if high < lower[k]:
+            boxes += (lower[k] - high) ** 2
+        elif low > upper[k]:
+            boxes += (low - upper[k]) ** 2
+        if middle < lower[k]:
+            ball += (lower[k] - middle) ** 2
+        elif middle > upper[k]:
+            ball += (middle - upper[k]) ** 2
+    return max(math.sqrt(boxes), math.sqrt(ball) - 0.5 * math.sqrt(half))
+
+
+@njit(cache=True, inline="always")
+def segment_search(p, q, bound, triangles, normals, lower, upper, children, ranges, root, stack):
+    """Branch and bound over the tree from node `root` for the segment pq, looking for a triangle nearer than `bound` (mm).
+
+    stack: scratch space of STACK_SIZE ints.  Returns (distance, position, on_segment, on_triangle):
+    the centreline distance and the triangle's position in tree order when one is nearer than
+    `bound`; else (bound, -1, p, p).
+    """
+    best, best_position, on_segment, on_triangle = bound, -1, p, p
+    stack[0] = root
+    top = 1
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if box_gap(p, q, lower[node], upper[node]) >= best:
+            continue
+        if children[node, 0] < 0:
+            first, count = ranges[node, 0], ranges[node, 1]
+            for position in range(first, first + count):
+                a, b, c = corners_of(triangles, position)
+                if segment_plane_gap(p, q, a, point_of(normals, position)) >= best:
+                    continue
+                d, x, y = segment_triangle_distance(p, q, a, b, c)
+                if d < best:
+                    best, best_position, on_segment, on_triangle = d, position, x, y
+            continue
+        left, right = children[node, 0], children[node, 1]
+        if box_gap(p, q, lower[left], upper[left]) <= box_gap(p, q, lower[right], upper[right]):
+            stack[top], stack[top + 1] = right, left  # the nearer child is opened first
+        else:
+            stack[top], stack[top + 1] = left, right
+        top += 2
+    return best, best_position, on_segment, on_triangle
+
+
+@njit(cache=True)
+def items_within(p, q, reach, lower, upper, children, ranges, root, stack):
+    """Positions (in tree order) of the items in the leaves, below node `root`, whose boxes come within `reach` mm of segment pq.
+
+    A superset of the items within reach (a box is nearer than what it holds); the caller measures them.
+    stack: scratch space of STACK_SIZE ints.
+    """
+    found = [0 for _ in range(0)]
+    stack[0] = root
+    top = 1
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if box_gap(p, q, lower[node], upper[node]) >= reach:
+            continue
+        if children[node, 0] < 0:
+            for position in range(ranges[node, 0], ranges[node, 0] + ranges[node, 1]):
+                found.append(position)
+            continue
+        stack[top], stack[top + 1] = children[node, 0], children[node, 1]
+        top += 2
+    return found

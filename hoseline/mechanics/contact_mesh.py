@@ -1,0 +1,399 @@
+"""Contact with triangle meshes (obstacle meshes, boxes): the pairs within reach and the gaps of the step filter.
+
+Pairs.  The hose is a chain of capsules (radius r about each segment).  The distance between a
+segment and a triangle it does not cross is attained at an end of the segment or on an edge of
+the triangle (inside both, the segment would have to be parallel to the face, and the nearest
+pair slides to an end or an edge), so the exact distance of the hose to a mesh is the smallest
+station-triangle or segment-edge distance (contact.py's STATION_TRIANGLE and SEGMENT_EDGE, with
+exact gradients and Hessians; the IPC point-triangle and edge-edge pairs).  One segment-triangle
+distance per pair would not do as a barrier: a segment lying on a face (a hose resting on a
+floor) is at the distance min(d_p, d_q) from it, with a kink where it lies flat, and Newton's
+quadratic convergence needs a C2 energy; with stations a flat face gives exactly the
+station-plane pairs of an analytic plane.
+Left out, so that a flat surface pushes only along its normal and each station counts once: an
+edge between two triangles in one plane that continue each other (a floor's or a box face's
+diagonal: over a flat region the distance of a point of a segment is linear along it, smallest at a
+station), and a triangle's edge and vertex regions at such flat features (the neighbour across is
+nearer; on the feature itself, a tie, one triangle there pairs: MeshArrays.features); likewise an
+edge's end where exactly two edges continue each other in a straight line (MeshArrays.corners).
+Kept: boundary edges, ridges, valleys, edges of three or more triangles, folds.  Triangles of zero
+area (a line) are left out; their edges stay where other triangles border them.  Exactly
+coincident vertices are merged first (a STEP file's faces and an STL's triangles do not share theirs).
+
+Search.  A bounding-volume hierarchy over the triangles and one over the kept edges of each mesh
+(mechanics/bounding_volumes.py, the tree of the clearance search), so a query opens about
+log2(triangles) boxes and a 100 000-triangle mesh costs a station a few dozen distance
+evaluations, not 100 000.
+
+Step filter (contact_newton.StepFilter).  A mesh is a surface, not a solid: a station or segment
+could pass through a thin triangle within one step and end clear on the other side, so the
+analytic obstacles' argument (a primitive cannot cross a body without ending inside it) does not
+hold.  Plain conservative advancement (no point travels farther than its gap, with the isotropic
+bound h sum |delta_l| of a rotation step's move) holds but stalls a hose resting at gaps of 1e-4 mm
+that has to slide.  So the whole path of the step is checked, which a sliding hose does not come
+nearer along: a frame rotated by alpha delta turns its tangent on a circular arc, so station k's
+path lies within (h/8) sum_(l<k) (alpha |delta_l|)^2 of its chord (the interpolation error bound,
+|d2/dtau2 exp(tau theta) t| <= theta^2), and the chord's exact gap to the meshes (segment_gaps)
+less that bound must stay above SAFE_FRACTION of the station's gap now.  A segment's interior
+first touches a mesh only at a kept edge (touching a face, one of its stations or a kept edge
+touches too), so each segment-edge pair within reach is checked along the segment carried by its
+ends' chords (swept_edges_clear).  Every first contact being a station-triangle or segment-edge
+touch, no accepted step enters or passes through a mesh.
+
+Written by hand (Numba), as contact.py: no library gives these pairs, their search and the swept
+checks with the exact derivatives the barrier needs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from hoseline.mechanics.bounding_volumes import LEAF_SIZE, STACK_SIZE, build_tree, items_within, point_of, segment_search
+from hoseline.mechanics.contact import (
+    EDGE_AB,
+    EDGE_AC,
+    EDGE_BC,
+    FACE,
+    SEGMENT_EDGE,
+    STATION_TRIANGLE,
+    VERTEX_A,
+    VERTEX_B,
+    VERTEX_C,
+    segment_parameters,
+    triangle_parameters,
+)
+from hoseline.model.obstacles import has_area
+
+FLAT = 1e-9  # sine of the angle below which two triangles sharing an edge lie in one plane
+TIE = 1e-10  # relative: a station this near a flat feature is on it (a tie)
+TIE_BITS = 8  # MeshArrays.features: bit f for a feature always paired at, bit f + TIE_BITS for one paired at on a tie
+COVERED, JOINT, CORNER = 0, 1, 2  # MeshArrays.corners: what an edge's end is
+
+
+def _empty_tree():
+    return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2), np.int64), np.zeros((0, 2), np.int64)
+
+
+@dataclass(frozen=True)
+class MeshArrays:
+    """The triangle meshes of a contact model, packed for the kernels (mm), each mesh with its own trees.
+
+    triangles (F, 3, 3): corners, in tree order, mesh after mesh.  normals (F, 3): unit normals.
+    features (F,): bit 1 << f set for each closest feature f (contact.FACE, EDGE_AB, ..., VERTEX_C) of the
+    triangle a station pairs with it at: its face, its kept edges, its vertices on kept edges; bit f + TIE_BITS
+    for a flat feature it pairs at only on a tie (the station on that feature).
+    triangle_tree: (lower (M, 3), upper (M, 3), children (M, 2), ranges (M, 2)) of every mesh's tree,
+    node and item indices global.  triangle_roots (K,): the root node of each mesh's tree.
+    triangle_mesh (F,): the mesh of each triangle.  edges (E, 2, 3), edge_tree, edge_roots, edge_mesh:
+    the same for the kept edges (-1 as root: a mesh without kept edges).  corners (E, 2): CORNER, JOINT or
+    COVERED for each end of an edge (_edge_corners): a segment pairs with an edge at a corner, not where
+    the edge continues straight on into another (that one is as near, and the end would push the hose
+    along the edge) but on a tie at the joint itself, there with one of the two.
+    owners (K,): index of each mesh's obstacle in ContactModel.names.
+    """
+
+    triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
+    features: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    triangle_tree: tuple = field(default_factory=_empty_tree)
+    triangle_roots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    triangle_mesh: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 3)))
+    corners: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    edge_tree: tuple = field(default_factory=_empty_tree)
+    edge_roots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    edge_mesh: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    owners: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    @property
+    def count(self) -> int:
+        """Number of meshes."""
+        return int(self.owners.shape[0])
+
+    def owner(self, kind: int, second: int) -> int:
+        """Index in ContactModel.names of the obstacle of a STATION_TRIANGLE or SEGMENT_EDGE pair."""
+        mesh = self.triangle_mesh[second] if kind == STATION_TRIANGLE else self.edge_mesh[second]
+        return int(self.owners[mesh])
+
+    def pairs(self, nodes: np.ndarray, hose_radius: float, cutoffs, *, every_feature: bool = False):
+        """(kinds, first, second, gaps) of the station-triangle and segment-edge pairs with a gap below the cutoff mm
+        of their station or segment: cutoffs, one for all, or (station cutoffs (N+1,), segment cutoffs (N,)).
+        every_feature: also the pairs at features a neighbour covers (flat edges, straight edge ends), as the
+        step filter must watch: a step can carry the hose to where they are the nearest."""
+        if np.isscalar(cutoffs):
+            cutoffs = (np.full(nodes.shape[0], float(cutoffs)), np.full(nodes.shape[0] - 1, float(cutoffs)))
+        return mesh_pairs(nodes, hose_radius, *cutoffs, self.triangles, self.features, *self.triangle_tree,
+                          self.triangle_roots, self.edges, self.corners, *self.edge_tree, self.edge_roots, every_feature)
+
+    def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
+                     bound: float) -> tuple[np.ndarray, np.ndarray]:
+        """(gaps (K, n) mm, triangles (K, n)): the exact gap of each capsule of `hose_radius` about the segments from
+        `starts` to `ends` ((n, 3) mm) to each mesh (negative inside, -r crossing a triangle) and its nearest
+        triangle; `bound` and -1 where the mesh is farther than `bound` mm."""
+        return segment_gaps(starts, ends, hose_radius, bound, self.triangles, self.normals, *self.triangle_tree,
+                            self.triangle_roots)
+
+
+def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) -> MeshArrays:
+    """MeshArrays of `meshes`, each (vertices (V, 3) mm, faces (F, 3) vertex indices), of the obstacles `owners`."""
+    if not meshes:
+        return MeshArrays()
+    parts = [_mesh_parts(vertices, faces) for vertices, faces in meshes]
+    triangles, triangle_tree, triangle_roots, order = _forest([part[0] for part in parts])
+    edges, edge_tree, edge_roots, edge_order = _forest([part[1] for part in parts])
+    return MeshArrays(
+        triangles=triangles,
+        features=np.concatenate([part[2] for part in parts])[order],
+        normals=_unit_normals(triangles),
+        triangle_tree=triangle_tree,
+        triangle_roots=triangle_roots,
+        triangle_mesh=np.repeat(np.arange(len(parts)), [len(part[0]) for part in parts]),
+        edges=edges,
+        corners=np.concatenate([part[3] for part in parts])[edge_order],
+        edge_tree=edge_tree,
+        edge_roots=edge_roots,
+        edge_mesh=np.repeat(np.arange(len(parts)), [len(part[1]) for part in parts]),
+        owners=np.asarray(owners, dtype=np.int64),
+    )
+
+
+def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(triangles (F, 3, 3), kept edges (E, 2, 3), features (F,) as MeshArrays.features) of one mesh: coincident
+    vertices merged, zero-area triangles and flat interior edges left out (see the module doc)."""
+    vertices, merged = np.unique(np.asarray(vertices, dtype=float), axis=0, return_inverse=True)
+    faces = merged.reshape(-1)[np.asarray(faces, dtype=np.int64)]
+    faces = faces[has_area(vertices[faces])]  # model.obstacles.Mesh refuses a mesh without any
+    corners = vertices[faces]
+    normals = _unit_normals(corners)
+    count = len(faces)
+    # every edge of every triangle (ab, bc, ca): its two vertices (sorted), the triangle, the opposite vertex
+    ends = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    opposite = np.concatenate([faces[:, 2], faces[:, 0], faces[:, 1]])
+    owner = np.tile(np.arange(count), 3)
+    ends.sort(axis=1)
+    order = np.lexsort((ends[:, 1], ends[:, 0]))
+    ends, opposite, owner = ends[order], opposite[order], owner[order]
+    new_edge = np.r_[True, np.any(ends[1:] != ends[:-1], axis=1)]
+    starts = np.flatnonzero(new_edge)
+    counts = np.diff(np.r_[starts, len(ends)])
+    keep = counts != 2
+    pairs = starts[counts == 2]
+    a, b = vertices[ends[pairs, 0]], vertices[ends[pairs, 1]]
+    n1, n2 = normals[owner[pairs]], normals[owner[pairs + 1]]
+    along = np.cross(n1, b - a)  # in the first triangle's plane, across the edge
+    coplanar = np.linalg.norm(np.cross(n1, n2), axis=1) < FLAT
+    continued = (np.einsum("ij,ij->i", vertices[opposite[pairs]] - a, along)
+                 * np.einsum("ij,ij->i", vertices[opposite[pairs + 1]] - a, along)) < 0.0
+    keep[counts == 2] = ~(coplanar & continued)
+    kept_edges = ends[starts[keep]]
+    # which features of each triangle a station pairs at: over a flat edge or a vertex amid a flat region the
+    # neighbour across it is nearer, and its edge region would push the hose along the surface; on such a
+    # feature itself (a tie) one triangle of those that meet there pairs, so that the station counts once
+    kept_record, owns_record = np.empty(len(ends), bool), np.empty(len(ends), bool)
+    kept_record[order], owns_record[order] = keep[np.cumsum(new_edge) - 1], new_edge
+    on_kept_edge = np.zeros(len(vertices), bool)
+    on_kept_edge[kept_edges.reshape(-1)] = True
+    first_face = np.full(len(vertices), count)
+    for corner in range(3):
+        np.minimum.at(first_face, faces[:, corner], np.arange(count))
+    always = np.stack([np.ones(count, bool), *kept_record.reshape(3, count)[[0, 2, 1]], *on_kept_edge[faces].T])
+    tie = np.stack([np.zeros(count, bool), *owns_record.reshape(3, count)[[0, 2, 1]],
+                    *(first_face[faces] == np.arange(count)[:, None]).T]) & ~always
+    shifts = np.array([FACE, EDGE_AB, EDGE_AC, EDGE_BC, VERTEX_A, VERTEX_B, VERTEX_C])[:, None]
+    features = np.sum((always.astype(np.int64) << shifts) | (tie.astype(np.int64) << (shifts + TIE_BITS)), axis=0)
+    edges = np.stack([vertices[kept_edges[:, 0]], vertices[kept_edges[:, 1]]], axis=1)
+    return corners, edges, features.astype(np.int64), _edge_corners(kept_edges, edges)
+
+
+def _edge_corners(ends: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """(E, 2) int: what each end of the edges (vertex indices `ends` (E, 2), points `edges` (E, 2, 3)) is: CORNER,
+    or where exactly two edges continue each other in a straight line, JOINT for one of them, COVERED for the
+    other (a segment pairs with the JOINT end only when nearest the joint itself)."""
+    directions = (edges[:, 1] - edges[:, 0]) / np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1)[:, None]
+    vertex = ends.T.reshape(-1)  # the first ends, then the second ends
+    away = np.concatenate([directions, -directions])  # from the vertex along the edge
+    order = np.argsort(vertex, kind="stable")
+    counts = np.bincount(vertex, minlength=int(vertex.max()) + 1)[vertex]
+    kind = np.full(len(vertex), CORNER)
+    two = order[counts[order] == 2].reshape(-1, 2)  # the two edge ends at each vertex of two edges
+    straight = np.einsum("ij,ij->i", away[two[:, 0]], away[two[:, 1]]) < -1.0 + FLAT
+    kind[two[straight, 0]] = JOINT
+    kind[two[straight, 1]] = COVERED
+    return np.ascontiguousarray(kind.reshape(2, -1).T)
+
+
+def _unit_normals(corners: np.ndarray) -> np.ndarray:
+    """(F, 3) unit normals (b - a) x (c - a) of the triangles `corners` (F, 3, 3), each with an area."""
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    return normals / np.linalg.norm(normals, axis=1)[:, None]
+
+
+def _forest(item_corners: list[np.ndarray]) -> tuple[np.ndarray, tuple, np.ndarray, np.ndarray]:
+    """(items in tree order (n, k, 3), tree arrays with global indices, root of each part (-1: empty), the index of
+    each item in tree order among all parts' items) of one tree per part, item_corners: each part's items
+    (n_i, k, 3) as their corner points."""
+    items, trees, roots, orders = [], [], [], []
+    nodes = count = 0
+    for corners in item_corners:
+        if len(corners) == 0:
+            roots.append(-1)
+            continue
+        order, lower, upper, children, ranges = build_tree(corners.min(axis=1), corners.max(axis=1),
+                                                           corners.mean(axis=1), LEAF_SIZE)
+        items.append(corners[order])
+        orders.append(order + count)
+        trees.append((lower, upper, np.where(children >= 0, children + nodes, -1), ranges + [count, 0]))
+        roots.append(nodes)
+        nodes += len(lower)
+        count += len(order)
+    shape = item_corners[0].shape[1:]
+    if not items:
+        return np.zeros((0, *shape)), _empty_tree(), np.array(roots, dtype=np.int64), np.zeros(0, np.int64)
+    tree = tuple(np.ascontiguousarray(np.concatenate([tree[k] for tree in trees])) for k in range(4))
+    return (np.ascontiguousarray(np.concatenate(items)), tree, np.array(roots, dtype=np.int64),
+            np.concatenate(orders))
+
+
+@njit(cache=True)
+def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, t_lower, t_upper, t_children,
+               t_ranges, t_roots, edges, corners, e_lower, e_upper, e_children, e_ranges, e_roots, every_feature):
+    """Station-triangle and segment-edge pairs with a gap (mm) below the cutoff (mm) of their station or segment.
+
+    nodes (N+1, 3) mm (station 0 is held: not paired); station_cutoffs (N+1,), segment_cutoffs (N,) mm.
+    Returns (kinds, first (station or segment), second (triangle or edge), gaps) as contact.pair_gaps.
+    """
+    kinds, first, second, gaps = [0 for _ in range(0)], [0 for _ in range(0)], [0 for _ in range(0)], [0.0 for _ in range(0)]
+    stack = np.empty(STACK_SIZE, np.int64)
+    for k in range(1, nodes.shape[0]):
+        x = point_of(nodes, k)
+        cutoff = station_cutoffs[k]
+        reach = cutoff + hose_radius
+        for root in t_roots:
+            if root < 0:
+                continue
+            for position in items_within(x, x, reach, t_lower, t_upper, t_children, t_ranges, root, stack):
+                a, b, c = triangles[position, 0], triangles[position, 1], triangles[position, 2]
+                u, v, feature = triangle_parameters(nodes[k], a, b, c)
+                r = nodes[k] - ((1.0 - u - v) * a + u * b + v * c)
+                distance = np.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+                if not every_feature and not (features[position] >> feature) & 1:
+                    if not (features[position] >> (feature + TIE_BITS)) & 1:
+                        continue  # beside the triangle, over a neighbour in its plane
+                    normal = np.cross(b - a, c - a)
+                    if distance > (1.0 + TIE) * abs(np.sum(normal * (nodes[k] - a))) / np.sqrt(np.sum(normal * normal)):
+                        continue  # not on the flat feature it owns
+                gap = distance - hose_radius
+                if gap < cutoff:
+                    kinds.append(STATION_TRIANGLE)
+                    first.append(k)
+                    second.append(position)
+                    gaps.append(gap)
+    for i in range(nodes.shape[0] - 1):
+        p, q = point_of(nodes, i), point_of(nodes, i + 1)
+        cutoff = segment_cutoffs[i]
+        reach = cutoff + hose_radius
+        for root in e_roots:
+            if root < 0:
+                continue
+            for position in items_within(p, q, reach, e_lower, e_upper, e_children, e_ranges, root, stack):
+                a, b = edges[position, 0], edges[position, 1]
+                distance, _, y = _closest(nodes[i], nodes[i + 1], a, b)
+                at_end = 0 if np.all(y == a) else 1 if np.all(y == b) else -1
+                if not every_feature and at_end >= 0 and corners[position, at_end] != CORNER:
+                    if corners[position, at_end] == COVERED:
+                        continue  # beyond this edge's end the edge that continues it is nearer
+                    if distance > (1.0 + TIE) * _closest(nodes[i], nodes[i + 1], 2.0 * a - b, 2.0 * b - a)[0]:
+                        continue  # not at the joint itself
+                gap = distance - hose_radius
+                if gap < cutoff:
+                    kinds.append(SEGMENT_EDGE)
+                    first.append(i)
+                    second.append(position)
+                    gaps.append(gap)
+    return (np.array(kinds, dtype=np.int64), np.array(first, dtype=np.int64), np.array(second, dtype=np.int64),
+            np.array(gaps, dtype=np.float64))
+
+
+@njit(cache=True)
+def segment_gaps(starts, ends, hose_radius, bound, triangles, normals, lower, upper, children, ranges, roots):
+    """The exact gap (mm) of each segment starts[i] to ends[i] to each mesh and the nearest triangle, (K, n) each;
+    `bound` and -1 beyond it.
+
+    The segment-triangle distance (mechanics/proximity.py, zero where the segment crosses a triangle)
+    less the hose radius, by branch and bound over each mesh's tree.
+    """
+    n_seg = starts.shape[0]
+    gaps = np.full((roots.shape[0], n_seg), bound)
+    nearest = -np.ones((roots.shape[0], n_seg), np.int64)
+    stack = np.empty(STACK_SIZE, np.int64)
+    for m in range(roots.shape[0]):
+        for i in range(n_seg):
+            d, position, _, _ = segment_search(point_of(starts, i), point_of(ends, i), bound + hose_radius,
+                                               triangles, normals, lower, upper, children, ranges, roots[m], stack)
+            if position >= 0:
+                gaps[m, i] = d - hose_radius
+                nearest[m, i] = position
+    return gaps, nearest
+
+
+@njit(cache=True)
+def _closest(p, q, a, b):
+    # (distance mm, point on pq, point on ab) of segments pq and ab
+    s, t = segment_parameters(p, q, a, b)
+    x = (1.0 - s) * p + s * q
+    y = (1.0 - t) * a + t * b
+    return np.sqrt(np.sum((x - y) ** 2)), x, y
+
+
+@njit(cache=True)
+def _plane_bound(d, x, y, p, q):
+    # a lower bound (mm) of the distance of segment pq to the segment whose closest pair to another is (x, y) at
+    # distance d: the plane through y normal to x - y separates that segment from everything on x's side
+    if d <= 0.0:
+        return 0.0
+    n = (x - y) / d
+    return min(np.sum(n * (p - y)), np.sum(n * (q - y)))
+
+
+@njit(cache=True)
+def swept_edges_clear(start, end, first, second, edges, clearances, evaluations):
+    """Whether each hose segment first[p], carried from its place in `start` to that in `end` ((N+1, 3) mm, its ends
+    on straight lines), stays farther than clearances[p] mm from edge second[p], for every listed pair.
+
+    Branch and bound on the fraction tau of the move.  At tau_a the plane through the edge's closest point,
+    normal to the closest pair, separates the edge from the segment; along the move the distance of the segment's
+    ends from that plane is linear in tau, so over [tau_a, tau_b] the distance is at least the smaller of its
+    values at the two ends of the interval (likewise from tau_b); an interval is split until that bound clears
+    or a distance does not.  A segment sliding along an edge keeps its distance from the plane: no split.
+    Undecided after `evaluations` distances per pair: not clear (the step is then cut).
+    """
+    intervals = np.empty((evaluations + 2, 2))
+    for pair in range(first.shape[0]):
+        i, a, b, clearance = first[pair], edges[second[pair], 0], edges[second[pair], 1], clearances[pair]
+        p0, q0, p1, q1 = start[i], start[i + 1], end[i], end[i + 1]
+        move = max(np.sqrt(np.sum((p1 - p0) ** 2)), np.sqrt(np.sum((q1 - q0) ** 2)))
+        if _closest(p0, q0, a, b)[0] - move > clearance:  # cannot come nearer than its move: no search
+            continue
+        intervals[0] = (0.0, 1.0)
+        count, used = 1, 0
+        while count > 0:
+            count -= 1
+            ta, tb = intervals[count]
+            pa, qa, pb, qb = p0 + ta * (p1 - p0), q0 + ta * (q1 - q0), p0 + tb * (p1 - p0), q0 + tb * (q1 - q0)
+            da, xa, ya = _closest(pa, qa, a, b)
+            db, xb, yb = _closest(pb, qb, a, b)
+            used += 2
+            if min(da, db) <= clearance:
+                return False
+            if max(_plane_bound(da, xa, ya, pb, qb), _plane_bound(db, xb, yb, pa, qa)) > clearance:
+                continue
+            if used >= evaluations:
+                return False
+            tm = 0.5 * (ta + tb)
+            intervals[count] = (ta, tm)
+            intervals[count + 1] = (tm, tb)
+            count += 2
+    return True

@@ -1,0 +1,405 @@
+"""Contact with triangle meshes and boxes (mechanics/contact_mesh.py): derivatives, equilibria, scale, input."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hoseline.mechanics.contact import (
+    EDGE_AB,
+    EDGE_AC,
+    EDGE_BC,
+    FACE,
+    SEGMENT_EDGE,
+    STATION_TRIANGLE,
+    VERTEX_A,
+    VERTEX_B,
+    VERTEX_C,
+    node_terms,
+    triangle_parameters,
+)
+from hoseline.mechanics.contact_mesh import pack_meshes
+from hoseline.mechanics.rod import centerline
+
+RADIUS, D_HAT, WEIGHT = 1.0, 3.0, 1.7
+TRIANGLE = np.array([[0.0, 0.0, 0.0], [4.0, 0.5, 0.3], [1.0, 3.5, -0.4]]) + [1.3, -0.7, 0.4]  # off the origin (a wrong sign of a corner's coefficient shows)
+NO_PLANES, NO_BALLS, NO_CAPSULES = np.zeros((0, 6)), np.zeros((0, 4)), np.zeros((0, 7))
+
+
+def _terms(nodes, triangles, edges, kinds, first, second):
+    return node_terms(nodes, RADIUS, WEIGHT, D_HAT, NO_PLANES, NO_BALLS, NO_CAPSULES, triangles, edges,
+                      kinds, first, second)
+
+
+def _check_against_finite_differences(nodes, triangles, edges, kind, first, second):
+    """Gradient against central differences of the energy, Hessian against central differences of the gradient."""
+    pair = np.array([kind]), np.array([first]), np.array([second])
+    energy, grad, hess, *_ = _terms(nodes, triangles, edges, *pair)
+    assert energy > 0.0
+    step = 1e-6
+    for k in range(nodes.shape[0]):
+        for x in range(3):
+            plus, minus = nodes.copy(), nodes.copy()
+            plus[k, x] += step
+            minus[k, x] -= step
+            e_p, g_p, *_ = _terms(plus, triangles, edges, *pair)
+            e_m, g_m, *_ = _terms(minus, triangles, edges, *pair)
+            assert grad[k, x] == pytest.approx((e_p - e_m) / (2 * step), rel=1e-5, abs=1e-7)
+            numeric = (g_p - g_m) / (2 * step)
+            assert np.allclose(hess[:, k, :, x], numeric, rtol=1e-4, atol=1e-5), (k, x)
+
+
+def _station_over(feature, rng):
+    """A point whose nearest feature of TRIANGLE is `feature`, 1.2 to 2.5 mm from it (a gap in (0, d_hat))."""
+    a, b, c = TRIANGLE
+    normal = np.cross(b - a, c - a)
+    normal /= np.linalg.norm(normal)
+    u, v = rng.uniform(0.15, 0.35, size=2)
+    inside = (1.0 - u - v) * a + u * b + v * c
+    targets = {
+        FACE: (inside, normal),
+        EDGE_AB: (0.6 * a + 0.4 * b, np.cross(b - a, normal)),
+        EDGE_AC: (0.3 * a + 0.7 * c, np.cross(normal, c - a)),
+        EDGE_BC: (0.5 * b + 0.5 * c, np.cross(c - b, normal)),
+        VERTEX_A: (a, -(b - a) - (c - a)),
+        VERTEX_B: (b, (b - a) + (b - c)),
+        VERTEX_C: (c, (c - a) + (c - b)),
+    }
+    point, outward = targets[feature]
+    outward = outward / np.linalg.norm(outward)
+    if feature != FACE:  # off the face's plane as well, as a station beside an edge would be
+        outward = outward + rng.uniform(-0.5, 0.5) * normal
+        outward /= np.linalg.norm(outward)
+    return point + rng.uniform(2.2, 3.5) * outward
+
+
+@pytest.mark.parametrize("feature", [FACE, EDGE_AB, EDGE_AC, EDGE_BC, VERTEX_A, VERTEX_B, VERTEX_C])
+def test_station_triangle_gradient_and_hessian_in_every_region(feature):
+    rng = np.random.default_rng(feature)
+    for _ in range(5):
+        station = _station_over(feature, rng)
+        assert triangle_parameters(station, *TRIANGLE)[2] == feature
+        nodes = np.array([station - [3.0, 0.2, 0.1], station])
+        _check_against_finite_differences(nodes, TRIANGLE[None], np.zeros((0, 2, 3)), STATION_TRIANGLE, 1, 0)
+
+
+@pytest.mark.parametrize("case", ["crossing", "end on edge", "over an edge end", "end to end"])
+def test_segment_edge_gradient_and_hessian(case):
+    rng = np.random.default_rng(len(case))
+    offset = np.array([0.6, 1.1, -0.3])  # off the origin, where a wrong sign of a point's coefficient shows
+    edge = np.array([[0.0, 0.0, 0.0], [5.0, 0.0, 0.0]]) + offset
+    for _ in range(5):
+        lift = np.array([0.0, 0.0, rng.uniform(2.2, 3.5)])
+        if case == "crossing":  # both closest points inside: s, t free
+            p, q = np.array([2.0, -2.0, 0.0]), np.array([3.0, 2.0, 0.5])
+        elif case == "end on edge":  # the segment's end nearest, inside the edge: t free
+            p, q = np.array([2.5, 0.0, 0.0]), np.array([2.0, 1.0, 4.0])
+        elif case == "over an edge end":  # inside the segment, at the edge's end: s free
+            p, q = np.array([6.0, -2.0, 0.0]), np.array([5.5, 2.0, 0.2])
+        else:  # both at ends
+            p, q = np.array([6.0, 0.5, 0.0]), np.array([9.0, 1.0, 1.0])
+        jitter = 0.1 * rng.standard_normal((2, 3))
+        nodes = np.array([p, q]) + lift + jitter + offset
+        _check_against_finite_differences(nodes, np.zeros((0, 3, 3)), edge[None], SEGMENT_EDGE, 0, 0)
+
+
+def test_flat_edges_are_left_out_and_ridges_kept():
+    floor = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
+    two = pack_meshes([(floor, np.array([[0, 1, 2], [0, 2, 3]]))], [0])
+    assert two.edges.shape[0] == 4  # the boundary, not the diagonal
+    folded = floor.copy()
+    folded[3, 2] = 0.5  # the second triangle tilted up about the diagonal: a valley, kept
+    assert pack_meshes([(folded, np.array([[0, 1, 2], [0, 2, 3]]))], [0]).edges.shape[0] == 5
+    sliver = np.vstack([floor, [[0.0, 0.0, 0.0]]])  # a zero-area triangle on the diagonal is left out
+    with_sliver = pack_meshes([(sliver, np.array([[0, 1, 2], [0, 2, 3], [0, 4, 2]]))], [0])
+    assert with_sliver.triangles.shape[0] == 2
+
+
+# --- equilibria: a mesh floor is the plane, a faceted drum the cylinder, a box edge carries its share ---
+
+LENGTH, EI, MASS, HALF_SPAN, HEIGHT, HOSE_RADIUS = 1000.0, 2e4, 0.5, 420.0, 150.0, 5.0
+HOSE_WEIGHT = MASS * 9.81e-3  # N/mm
+
+
+def _follow(obstacle, problem, end, pressure, placed=None):
+    """The problem placed without contact (end high, clear of the obstacle), then its end carried to `end` with
+    contact on: (props, clamps, state, model, contact forces and gaps at the end)."""
+    from hoseline.mechanics.contact_newton import evaluate_contact, minimum_gap
+    from hoseline.procedures.contact.continuation import follow_contact
+    from hoseline.procedures.contact.model import contact_model
+    from hoseline.procedures.placement.sequence import place_only
+
+    props, high, state, _ = placed or place_only(problem)
+    model = contact_model([obstacle], HOSE_RADIUS, props.segment_length, pressure)
+    assert minimum_gap(props, high, state, model) > 10.0
+
+    def path(t):
+        return replace(high, end_point=(1.0 - t) * high.end_point + t * np.asarray(end))
+
+    state, _ = follow_contact("carry the end", path, props, state, model)
+    system = evaluate_contact(props, path(1.0), state, model)
+    return props, path(1.0), state, model, system, minimum_gap(props, path(1.0), state, model)
+
+
+@pytest.fixture(scope="module")
+def hanging_hose():
+    from hoseline.model.hose import Hose
+    from hoseline.model.mounts import Mount
+    from hoseline.model.problem import Problem
+    from hoseline.procedures.placement.sequence import place_only
+
+    hose = Hose(length=LENGTH, outer_diameter=2 * HOSE_RADIUS, bending_stiffness=EI, torsional_stiffness=EI,
+                mass_per_length=MASS, segments=100)
+    down = np.array([0.0, 0.0, -1.0])
+    problem = Problem(hose, Mount(np.array([-HALF_SPAN, 0.0, HEIGHT]), down), Mount(np.array([300.0, 0.0, 500.0]), down),
+                      gravity=np.array([0.0, 0.0, -9.81]))
+    return problem, place_only(problem)
+
+
+def test_a_two_triangle_floor_gives_the_plane_s_equilibrium(hanging_hose):
+    from hoseline.model.obstacles import Mesh, Plane
+    from hoseline.procedures.contact.model import reference_pressure
+
+    problem, placed = hanging_hose
+    pressure = reference_pressure(HOSE_WEIGHT, EI, LENGTH)
+    end = [HALF_SPAN, 0.0, HEIGHT]
+    plane = _follow(Plane(np.zeros(3), np.array([0.0, 0.0, 1.0]), "floor"), problem, end, pressure, placed)
+    # an irregular quadrilateral in the plane z = 0, split along a diagonal the hose lies across
+    tiles = Mesh(np.array([[-700.0, -300.0, 0.0], [700.0, -250.0, 0.0], [650.0, 300.0, 0.0], [-600.0, 350.0, 0.0]]),
+                 np.array([[0, 1, 2], [0, 2, 3]]), "floor")
+    mesh = _follow(tiles, problem, end, pressure, placed)
+    nodes = [centerline(result[2].frames, result[1].start_point, result[0].segment_length) for result in (plane, mesh)]
+    assert np.max(np.abs(nodes[0] - nodes[1])) < 1e-8  # mm
+    np.testing.assert_allclose(mesh[2].end_force, plane[2].end_force, rtol=1e-9, atol=1e-12)
+    assert mesh[4].forces[:, 2].sum() == pytest.approx(plane[4].forces[:, 2].sum(), rel=1e-9)
+    assert mesh[4].gaps.size == plane[4].gaps.size == 45  # the same stations touch
+    assert 0.0 < mesh[5] < mesh[3].activation and mesh[5] == pytest.approx(plane[5], rel=1e-6)
+
+
+def _faceted_drum(facets, rows=1, radius=40.0, half_length=200.0):
+    """A cylinder of `radius` about the y axis cut into `facets` flat sides (vertices on the circle) and `rows`
+    rings: (vertices, faces), 2 facets rows triangles."""
+    angles = 2.0 * np.pi * (np.arange(facets) + 0.5) / facets
+    ys = np.linspace(-half_length, half_length, rows + 1)
+    vertices = np.array([[radius * np.cos(a), y, radius * np.sin(a)] for y in ys for a in angles])
+    faces = []
+    for row in range(rows):
+        for k in range(facets):
+            a, b = row * facets + k, row * facets + (k + 1) % facets
+            faces += [[a, b, b + facets], [a, b + facets, a + facets]]
+    return vertices, np.array(faces)
+
+
+@pytest.fixture(scope="module")
+def pulled_over_a_drum():
+    from hoseline.model.hose import Hose
+    from hoseline.model.mounts import Mount
+    from hoseline.model.obstacles import Cylinder
+    from hoseline.model.problem import Problem
+    from hoseline.procedures.contact.model import bend_length, reference_pressure
+    from hoseline.procedures.placement.sequence import place_only
+
+    hose = Hose(length=335.0, outer_diameter=2 * HOSE_RADIUS, bending_stiffness=1e5, torsional_stiffness=1e5,
+                segments=100)
+    up = np.array([0.0, 0.0, 1.0])
+    problem = Problem(hose, Mount(np.array([-100.0, 0.0, -80.0]), up), Mount(np.array([60.0, 0.0, 150.0]), up))
+    drum = Cylinder(np.array([0.0, -200.0, 0.0]), np.array([0.0, 200.0, 0.0]), 40.0, "drum")
+    pressure = reference_pressure(0.0, 1e5, bend_length(335.0, [drum], HOSE_RADIUS))
+    placed = place_only(problem)
+    end = [100.0, 0.0, -80.0]
+    return problem, placed, end, pressure, _follow(drum, problem, end, pressure, placed)
+
+
+def _against_the_drum(faceted, round_drum):
+    """(largest station distance mm, end force difference N) of two drum results."""
+    nodes = [centerline(result[2].frames, result[1].start_point, result[0].segment_length) for result in (faceted, round_drum)]
+    return float(np.max(np.abs(nodes[0] - nodes[1]))), float(np.linalg.norm(faceted[2].end_force - round_drum[2].end_force))
+
+
+def test_a_faceted_drum_agrees_with_the_cylinder_within_its_faceting(pulled_over_a_drum):
+    from hoseline.model.obstacles import Mesh
+
+    problem, placed, end, pressure, round_drum = pulled_over_a_drum
+    differences = []
+    for facets in (64, 128):
+        faceted = _follow(Mesh(*_faceted_drum(facets), "drum"), problem, end, pressure, placed)
+        sagitta = 40.0 * (1.0 - np.cos(np.pi / facets))  # how far a facet's middle lies inside the circle
+        assert 0.0 < faceted[5] < faceted[3].activation
+        # the drum's push balances the mounts (the problem is symmetric: twice the end's vertical force)
+        push = faceted[4].forces.sum(axis=0)
+        assert push[2] == pytest.approx(-2.0 * faceted[2].end_force[2], rel=1e-6)
+        distance, force = _against_the_drum(faceted, round_drum)
+        assert distance < sagitta, (facets, distance, sagitta)  # measured 0.041 of 0.048, 0.011 of 0.012 mm
+        differences.append(force)
+    assert differences[1] < 0.25 * differences[0]  # 1.5 against 11.3 N of 570 N: converging as the facets shrink
+
+
+def test_a_drum_of_100000_triangles_is_searched_not_looped_over(pulled_over_a_drum):
+    import time
+
+    from hoseline.model.obstacles import Mesh
+    from hoseline.procedures.contact.model import contact_model
+
+    problem, placed, end, pressure, round_drum = pulled_over_a_drum
+    vertices, faces = _faceted_drum(500, rows=100)
+    assert faces.shape[0] == 100_000
+    drum = Mesh(vertices, faces, "drum")
+    faceted = _follow(drum, problem, end, pressure, placed)
+    distance, _ = _against_the_drum(faceted, round_drum)
+    assert distance < 0.01 and 0.0 < faceted[5] < faceted[3].activation  # 500 facets: sagitta 0.0008 mm
+    # one search of the pairs near the hose: the tree opens a few dozen boxes per station, where a loop over
+    # all 100 000 triangles for each of 101 stations would take some 100 ms
+    model = contact_model([drum], HOSE_RADIUS, faceted[0].segment_length, pressure)
+    nodes = centerline(faceted[2].frames, faceted[1].start_point, faceted[0].segment_length)
+    times = []
+    for _ in range(5):
+        begin = time.perf_counter()
+        kinds = model.pairs(nodes, model.activation)[0]
+        times.append(time.perf_counter() - begin)
+    assert kinds.size > 0 and np.median(times) < 0.02, times
+
+
+def test_pairs_found_through_the_tree_are_those_of_all_triangles():
+    rng = np.random.default_rng(3)
+    vertices, faces = _faceted_drum(24, rows=6)
+    vertices = vertices + 0.5 * rng.standard_normal(vertices.shape)  # ridges and valleys in every direction
+    mesh = pack_meshes([(vertices, faces)], [0])
+    nodes = np.cumsum(np.vstack([[[-60.0, -30.0, 38.0]], 6.0 * rng.standard_normal((30, 3)) + [4.0, 2.0, 0.0]]), axis=0)
+
+    def one_leaf(items):  # a tree of a single leaf holding every item: the search is a loop over all of them
+        return (items.min(axis=(0, 1))[None], items.max(axis=(0, 1))[None], -np.ones((1, 2), np.int64),
+                np.array([[0, items.shape[0]]]))
+
+    looped = replace(mesh, triangle_tree=one_leaf(mesh.triangles), edge_tree=one_leaf(mesh.edges),
+                     triangle_roots=np.zeros(1, np.int64), edge_roots=np.zeros(1, np.int64))
+    for every_feature in (False, True):
+        found = mesh.pairs(nodes, 2.0, 6.0, every_feature=every_feature)
+        brute = looped.pairs(nodes, 2.0, 6.0, every_feature=every_feature)
+        assert found[0].size > 20
+        assert sorted(zip(*[a.tolist() for a in found[:3]])) == sorted(zip(*[a.tolist() for a in brute[:3]]))
+
+
+BOX_BASE = {"hose": {"length": 600.0, "outer_diameter": 10.0, "bending_stiffness": 2e4, "mass_per_length": 0.5,
+                     "segments": 60},
+            "start": {"point": [-200.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0]},
+            "end": {"point": [200.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0]},
+            "environment": {"gravity": [0.0, 0.0, -9.81]}}
+BLOCK = {"kind": "box", "center": [-150.0, 0.0, -260.0], "size": [300.0, 100.0, 400.0], "name": "block"}
+
+
+def test_a_heavy_hose_hangs_over_a_box_edge_clear_of_it_and_in_balance():
+    from hoseline.io.problem_file import problem_from_dict
+    from hoseline.procedures.contact.model import DEFAULT_ACTIVATION
+    from hoseline.procedures.placement.sequence import solve
+
+    free = solve(problem_from_dict(BOX_BASE), estimate_error=False)
+    inside = (free.centerline[:, 0] < HOSE_RADIUS) & (free.centerline[:, 2] < -60.0 + HOSE_RADIUS)
+    assert np.any(inside)  # without contact the hose sags into the block
+    result = solve(problem_from_dict(BOX_BASE | {"contact": {"obstacles": [BLOCK]}}), estimate_error=False)
+    block, = result.contacts
+    assert block.kind == "box" and 0.0 < block.min_gap < DEFAULT_ACTIVATION
+    # it rests on the block's edge (x = 0, z = -60), pushed away from the edge through the hose's axis
+    np.testing.assert_allclose(block.surface_point[:, [0, 2]], [[0.0, -60.0]] * block.gap.size, atol=1e-9)
+    away = block.point - block.surface_point
+    np.testing.assert_allclose(np.cross(away, block.force), 0.0, atol=1e-9 * np.abs(block.force).max())
+    assert np.all(np.einsum("ij,ij->i", away, block.force) > 0.0)
+    # mounts, block and weight balance
+    weight = np.array([0.0, 0.0, -MASS * 9.81e-3 * 600.0])
+    np.testing.assert_allclose(result.start_force + result.end_force + block.total_force + weight, 0.0,
+                               atol=1e-9 * np.linalg.norm(weight))
+    assert block.total_force[2] > 0.1 * np.linalg.norm(weight) and result.stable
+    assert result.summary()["contact"]["obstacles"][0]["kind"] == "box"
+
+
+# --- input ---
+
+
+def _problem_with(tmp_path, obstacle):
+    from hoseline.io.problem_file import problem_from_dict
+
+    return problem_from_dict(BOX_BASE | {"contact": {"obstacles": [obstacle]}}, "p.toml", tmp_path)
+
+
+def test_a_mesh_file_is_read_relative_to_the_problem_file_and_written_back(tmp_path):
+    import tomllib
+
+    from hoseline.io.obstacle_mesh import write_stl
+    from hoseline.io.problem_file import problem_from_dict, problem_to_dict, problem_to_toml
+
+    vertices, faces = _faceted_drum(12)
+    (tmp_path / "parts").mkdir()
+    write_stl(tmp_path / "parts" / "drum.stl", vertices + [0.0, 0.0, -200.0], faces)
+    problem = _problem_with(tmp_path, {"kind": "mesh", "file": "parts/drum.stl", "name": "drum"})
+    drum, = problem.contact
+    assert drum.kind == "mesh" and drum.faces.shape == (24, 3)
+    again = problem_from_dict(tomllib.loads(problem_to_toml(problem)))
+    assert problem_to_dict(again) == problem_to_dict(problem)
+    box = _problem_with(tmp_path, dict(BLOCK, axes=[[0.0, 2.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])).contact[0]
+    np.testing.assert_allclose(box.axes[0], [0.0, 1.0, 0.0])
+
+
+@pytest.mark.parametrize("obstacle, expected", [
+    ({"kind": "mesh", "file": "missing.stl"},
+     'contact.obstacles[0]: file = "missing.stl": cannot read'),
+    ({"kind": "mesh", "file": "nan.obj"}, "has vertices that are not finite numbers"),
+    ({"kind": "mesh", "file": "line.stl"}, "every triangle has zero area"),
+    ({"kind": "mesh"}, "contact.obstacles[0]: a mesh takes file: missing file"),
+    ({"kind": "mesh", "file": "nan.obj", "radius": 2.0}, "a mesh takes file: radius given"),
+    (dict(BLOCK, size=[300.0, 0.0, 400.0]), "contact.obstacles[0]: obstacle 'block' size = [300.0, 0.0, 400.0]: "
+                                            "must be three positive edge lengths in mm"),
+    (dict(BLOCK, axes=[[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]), "must be perpendicular"),
+    ({"kind": "box", "center": [0.0, 0.0, 0.0]}, "a box takes center and size (optional: axes): missing size"),
+])
+def test_bad_mesh_and_box_tables_are_refused_naming_the_field(tmp_path, obstacle, expected):
+    from hoseline.io.obstacle_mesh import write_stl
+    from hoseline.io.problem_file import ProblemFileError
+
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 nan 0\nf 1 2 3\nf 1 2 4\n")
+    write_stl(tmp_path / "line.stl", np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]), np.array([[0, 1, 2]]))
+    with pytest.raises(ProblemFileError) as error:
+        _problem_with(tmp_path, obstacle)
+    assert expected in str(error.value)
+
+
+def test_a_straight_start_through_a_mesh_is_refused_naming_it(tmp_path):
+    from hoseline.io.obstacle_mesh import write_stl
+    from hoseline.io.problem_file import problem_from_dict
+    from hoseline.procedures.placement.continuation import PlacementError
+    from hoseline.procedures.placement.sequence import solve
+
+    # a thin plate across the straight hose (from the start along x): no station inside it, a segment through it
+    write_stl(tmp_path / "plate.stl", np.array([[103.0, -50.0, -50.0], [103.0, 50.0, -50.0], [103.0, 0.0, 50.0]]),
+              np.array([[0, 1, 2]]))
+    problem = problem_from_dict(BOX_BASE | {"contact": {"obstacles": [{"kind": "mesh", "file": "plate.stl",
+                                                                      "name": "plate"}]}}, "p.toml", tmp_path)
+    with pytest.raises(PlacementError) as error:
+        solve(problem, estimate_error=False)
+    assert "'plate'" in str(error.value) and "straight hose" in str(error.value) and "segment" in str(error.value)
+
+
+def test_the_step_filter_refuses_a_step_through_a_thin_plate_that_ends_clear_of_it():
+    from hoseline.mechanics.contact_newton import step_filter
+    from hoseline.mechanics.newton import apply_step
+    from hoseline.model.hose import Hose
+    from hoseline.model.mounts import Mount
+    from hoseline.model.obstacles import Mesh
+    from hoseline.model.problem import Problem
+    from hoseline.procedures.contact.model import contact_model
+    from hoseline.procedures.placement.sequence import place_only
+
+    hose = Hose(length=300.0, outer_diameter=2 * HOSE_RADIUS, bending_stiffness=1e5, torsional_stiffness=1e5, segments=30)
+    along = np.array([1.0, 0.0, 0.0])
+    props, clamps, state, _ = place_only(Problem(hose, Mount(np.zeros(3), along), Mount(np.array([299.0, 0.0, 0.0]), along)))
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    middle = (nodes[:, 0] > 90.0) & (nodes[:, 0] < 210.0)
+    height = float(np.max(nodes[middle, 2])) + HOSE_RADIUS + 3.5  # a plate 3.5 mm above the hose's middle
+    plate = Mesh(np.array([[100.0, -50.0, height], [200.0, -50.0, height], [150.0, 50.0, height]]),
+                 np.array([[0, 1, 2]]), "plate")
+    model = contact_model([plate], HOSE_RADIUS, props.segment_length, 1.0)
+    for turn, admitted in ((0.2, False), (0.005, True)):  # every segment turned up: the hose swings up about its start
+        step = np.zeros(3 * props.segments)
+        step[1::3] = -turn
+        trial = apply_step(props, clamps, state, step, np.zeros(3))
+        moved = centerline(trial.frames, clamps.start_point, props.segment_length)
+        assert model.penetration(moved) is None  # clear at the end of the step: 30 mm above the plate, or below it
+        assert step_filter(props, clamps, state, step, model).admits(props, clamps, trial, model, 1.0) == admitted
