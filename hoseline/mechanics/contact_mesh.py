@@ -348,11 +348,13 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
 
 @njit(cache=True)
 def _takes(x, flat_edges, flat_sides):
-    # whether the station x (mm) is on the triangle's side of each of its flat edges, on an edge by the tie rule
+    # whether the station x (mm) is on the triangle's side of each of its flat edges, on an edge by the tie rule;
+    # x is taken from the edge's end nearer to it, so that near a vertex every edge there sees the same x - vertex
     for e in range(3):
         if flat_sides[e, 0] != 0.0:
             p, q, m = flat_edges[e, 0], flat_edges[e, 1], flat_edges[e, 2]
-            side = flat_sides[e, 0] * np.sum(np.cross(q - p, x - p) * m)
+            end = p if np.sum((x - p) ** 2) <= np.sum((x - q) ** 2) else q
+            side = flat_sides[e, 0] * np.sum(np.cross(q - p, x - end) * m)
             if side < 0.0 or (side == 0.0 and flat_sides[e, 1] < 0.0):
                 return False
     return True
