@@ -16,15 +16,20 @@ diagonal: over a flat region the distance of a point of a segment is linear alon
 station), and a triangle's edge and vertex regions at such flat features (the neighbour across is
 nearer: MeshArrays.features); likewise an edge's end where exactly two edges continue each other in
 a straight line (MeshArrays.corners).
-Over a flat region each station pairs with exactly one triangle, also on a flat edge or vertex
-(a hose lying along a grid line of a floor): each flat edge is given one orientation test,
-evaluated bit for bit alike for both its triangles with the opposite sign, and a triangle pairs at
-its face or at a flat feature only if the station is on its side of each of its flat edges
+Over a flat region each station pairs with exactly one triangle, also on a flat edge or vertex (a
+hose lying along a grid line of a floor): each flat edge is given one orientation test, evaluated
+bit for bit alike for both its triangles with the opposite sign (from the edge's end nearer the
+station, so that near a vertex every edge there sees the same offset), and a triangle pairs at its
+face or at a flat feature only if the station is on its side of each of its flat edges
 (MeshArrays.flat_edges); on an edge itself (the test zero) the triangle on the side of a fixed
 direction w takes it, as if the station were moved by an infinitesimal w (simulation of simplicity),
-so at a vertex too one triangle takes it.  Deciding by the Voronoi regions of each triangle alone
-left a band of 1e-5 mm about each flat edge where a station paired with both triangles (a double
-barrier, an energy jump that stopped Newton on a floor of 25 mm squares).
+so at a vertex too one triangle takes it.  A triangle that takes a station its Voronoi regions put
+beyond a flat feature (by rounding) measures it from that feature, the plane's distance to rounding,
+so the energy does not jump where a station passes from one triangle to the next.  Deciding by each
+triangle's Voronoi regions and a distance tie alone left a band of 7e-5 mm (5 mm above the face)
+about each flat edge where a station paired with both triangles (a double barrier, an energy jump
+that stopped Newton on a floor of 50 x 25 mm cells).  The tests are in floating point: on a plane
+not along the axes, rounding can still decide differently within about 1e-15 mm of a vertex.
 Kept: boundary edges, ridges, valleys, edges of three or more triangles, folds.  Triangles of zero
 area (a line) are left out; their edges stay where other triangles border them.  Exactly
 coincident vertices are merged first (a STEP file's faces and an STL's triangles do not share theirs).
@@ -96,7 +101,8 @@ class MeshArrays:
     its other (flat) features only where flat_edges give the station to it.
     flat_edges (F, 3, 3, 3): for each edge of each triangle that is flat (left out), its ends p, q in the order
     of their vertex indices and m, the sum of its two triangles' normals (shared by both, so that the test
-    ((q - p) x (x - p)) . m of a station x is bit for bit the same from either); flat_sides (F, 3, 2): the sign
+    ((q - p) x (x - e)) . m of a station x, e the end nearer x, is bit for bit the same from either); flat_sides
+    (F, 3, 2): the sign
     s of that test on the triangle's side (0: not a flat edge) and, for a station on the edge (test zero),
     +1 if the triangle takes it, else -1 (the sign of s ((q - p) x w) . m, TIE_DIRECTIONS).
     triangle_tree: (lower (M, 3), upper (M, 3), children (M, 2), ranges (M, 2)) of every mesh's tree,
@@ -141,9 +147,9 @@ class MeshArrays:
         step filter must watch: a step can carry the hose to where they are the nearest."""
         if np.isscalar(cutoffs):
             cutoffs = (np.full(nodes.shape[0], float(cutoffs)), np.full(nodes.shape[0] - 1, float(cutoffs)))
-        return mesh_pairs(nodes, hose_radius, *cutoffs, self.triangles, self.features, self.flat_edges,
-                          self.flat_sides, *self.triangle_tree,
-                          self.triangle_roots, self.edges, self.corners, *self.edge_tree, self.edge_roots, every_feature)
+        return mesh_pairs(nodes, hose_radius, *cutoffs, self.triangles, self.features, self.flat_edges, self.flat_sides,
+                          *self.triangle_tree, self.triangle_roots, self.edges, self.corners, *self.edge_tree,
+                          self.edge_roots, every_feature)
 
     def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
                      bound: float) -> tuple[np.ndarray, np.ndarray]:
@@ -291,7 +297,8 @@ def _forest(item_corners: list[np.ndarray]) -> tuple[np.ndarray, tuple, np.ndarr
 
 @njit(cache=True)
 def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges, flat_sides,
-               t_lower, t_upper, t_children, t_ranges, t_roots, edges, corners, e_lower, e_upper, e_children, e_ranges, e_roots, every_feature):
+               t_lower, t_upper, t_children, t_ranges, t_roots, edges, corners, e_lower, e_upper, e_children, e_ranges,
+               e_roots, every_feature):
     """Station-triangle and segment-edge pairs with a gap (mm) below the cutoff (mm) of their station or segment.
 
     nodes (N+1, 3) mm (station 0 is held: not paired); station_cutoffs (N+1,), segment_cutoffs (N,) mm.
