@@ -203,6 +203,18 @@ def test_a_station_over_a_grid_floor_pairs_with_one_triangle_on_its_edges_and_ve
                     assert kinds.size == 1 and gaps[0] == pytest.approx(0.001, abs=1e-12), (x + dx, y + dy, gaps)
 
 
+def test_a_segment_across_a_straight_ridge_cut_into_rows_pairs_with_one_of_its_edges_at_the_joint():
+    # a roof of two rows: its ridge is two edges in a straight line, the joint at the origin; a segment across the
+    # ridge at y from the joint pairs with one of them (before, with both within about 7e-5 mm on one side)
+    vertices = np.array([[x, y, -abs(x) / 5.0] for y in (-10.0, 0.0, 10.0) for x in (-5.0, 0.0, 5.0)])
+    faces = np.array([[a, a + 1, a + 4] for a in (0, 1, 3, 4)] + [[a, a + 4, a + 3] for a in (0, 1, 3, 4)])
+    mesh = pack_meshes([(vertices, faces)], [0])
+    for y in (0.0, 1e-16, -1e-16, 1e-8, -1e-8, 1e-5, -1e-5, 1e-3, -1e-3, 3.0, -3.0):
+        kinds, _, _, gaps = mesh.pairs(np.array([[-3.0, y, 5.001], [3.0, y, 5.001]]), 5.0, 1.0)
+        assert np.count_nonzero(kinds == SEGMENT_EDGE) == 1, y
+        assert gaps[kinds == SEGMENT_EDGE][0] == pytest.approx(0.001, abs=1e-12)
+
+
 HEAVY_HOSE = {"hose": {"length": 400.0, "outer_diameter": 10.0, "bending_stiffness": 500.0, "torsional_stiffness": 500.0,
                        "mass_per_length": 0.5, "segments": 30},
               "start": {"point": [-150.0, 0.0, 150.0], "direction": [1.0, 0.0, 0.0]},

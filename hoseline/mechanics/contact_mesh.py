@@ -82,7 +82,6 @@ from hoseline.mechanics.contact import (
 from hoseline.model.obstacles import has_area
 
 FLAT = 1e-9  # sine of the angle below which two triangles sharing an edge lie in one plane
-TIE = 1e-10  # relative: a segment this near a straight joint of two edges is at the joint (a tie)
 TIE_DIRECTIONS = np.array([[0.5257, 0.7236, 0.4472], [0.8017, -0.2673, 0.5345]])  # w, and w' for an edge along w (any fixed)
 COVERED, JOINT, CORNER = 0, 1, 2  # MeshArrays.corners: what an edge's end is
 
@@ -109,9 +108,12 @@ class MeshArrays:
     node and item indices global.  triangle_roots (K,): the root node of each mesh's tree.
     triangle_mesh (F,): the mesh of each triangle.  edges (E, 2, 3), edge_tree, edge_roots, edge_mesh:
     the same for the kept edges (-1 as root: a mesh without kept edges).  corners (E, 2): CORNER, JOINT or
-    COVERED for each end of an edge (_edge_corners): a segment pairs with an edge at a corner, not where
-    the edge continues straight on into another (that one is as near, and the end would push the hose
-    along the edge) but on a tie at the joint itself, there with one of the two.
+    COVERED for each end of an edge (_edge_corners): a segment pairs with an edge at a corner, but where the
+    edge continues straight on into another (that one is as near, and the end would push the hose along the
+    edge) only on its side of the joint.  joints (E, 2, 3, 3): for such an end, the joint (A, V, B): V the
+    shared vertex, A the JOINT edge's other end, B the COVERED edge's, the same for both; the side is that of
+    (y - V) . (B - A), y the point of the line AB nearest the segment (the same bits from either edge), and
+    the JOINT edge takes a segment on the joint itself (zero).
     owners (K,): index of each mesh's obstacle in ContactModel.names.
     """
 
@@ -125,6 +127,7 @@ class MeshArrays:
     triangle_mesh: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 3)))
     corners: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    joints: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 3, 3)))
     edge_tree: tuple = field(default_factory=_empty_tree)
     edge_roots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     edge_mesh: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
@@ -148,8 +151,8 @@ class MeshArrays:
         if np.isscalar(cutoffs):
             cutoffs = (np.full(nodes.shape[0], float(cutoffs)), np.full(nodes.shape[0] - 1, float(cutoffs)))
         return mesh_pairs(nodes, hose_radius, *cutoffs, self.triangles, self.features, self.flat_edges, self.flat_sides,
-                          *self.triangle_tree, self.triangle_roots, self.edges, self.corners, *self.edge_tree,
-                          self.edge_roots, every_feature)
+                          *self.triangle_tree, self.triangle_roots, self.edges, self.corners, self.joints,
+                          *self.edge_tree, self.edge_roots, every_feature)
 
     def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
                      bound: float) -> tuple[np.ndarray, np.ndarray]:
@@ -177,7 +180,8 @@ def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) 
         triangle_roots=triangle_roots,
         triangle_mesh=np.repeat(np.arange(len(parts)), [len(part[0]) for part in parts]),
         edges=edges,
-        corners=np.concatenate([part[3] for part in parts])[edge_order],
+        corners=np.concatenate([part[3][0] for part in parts])[edge_order],
+        joints=np.concatenate([part[3][1] for part in parts])[edge_order],
         edge_tree=edge_tree,
         edge_roots=edge_roots,
         edge_mesh=np.repeat(np.arange(len(parts)), [len(part[1]) for part in parts]),
@@ -186,8 +190,8 @@ def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) 
 
 
 def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple:
-    """(triangles (F, 3, 3), kept edges (E, 2, 3), features (F,), corners (E, 2), flat_edges (F, 3, 3, 3), flat_sides
-    (F, 3, 2), as in MeshArrays) of one mesh: coincident vertices merged, zero-area triangles and flat interior edges
+    """(triangles (F, 3, 3), kept edges (E, 2, 3), features (F,), (corners (E, 2), joints (E, 2, 3, 3)), flat_edges
+    (F, 3, 3, 3), flat_sides (F, 3, 2), as in MeshArrays) of one mesh: coincident vertices merged, zero-area triangles and flat interior edges
     left out (see the module doc)."""
     vertices, merged = np.unique(np.asarray(vertices, dtype=float), axis=0, return_inverse=True)
     faces = merged.reshape(-1)[np.asarray(faces, dtype=np.int64)]
@@ -246,10 +250,10 @@ def _flat_edges(count: int, p: np.ndarray, q: np.ndarray, m: np.ndarray, sides: 
     return flat_edges, flat_sides
 
 
-def _edge_corners(ends: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """(E, 2) int: what each end of the edges (vertex indices `ends` (E, 2), points `edges` (E, 2, 3)) is: CORNER,
-    or where exactly two edges continue each other in a straight line, JOINT for one of them, COVERED for the
-    other (a segment pairs with the JOINT end only when nearest the joint itself)."""
+def _edge_corners(ends: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(corners (E, 2) int, joints (E, 2, 3, 3) mm) of the edges (vertex indices `ends` (E, 2), points `edges`
+    (E, 2, 3)), as MeshArrays: each end a CORNER, or where exactly two edges continue each other in a straight
+    line, JOINT for one of them and COVERED for the other, both with the joint (A, V, B)."""
     directions = (edges[:, 1] - edges[:, 0]) / np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1)[:, None]
     vertex = ends.T.reshape(-1)  # the first ends, then the second ends
     away = np.concatenate([directions, -directions])  # from the vertex along the edge
@@ -258,9 +262,16 @@ def _edge_corners(ends: np.ndarray, edges: np.ndarray) -> np.ndarray:
     kind = np.full(len(vertex), CORNER)
     two = order[counts[order] == 2].reshape(-1, 2)  # the two edge ends at each vertex of two edges
     straight = np.einsum("ij,ij->i", away[two[:, 0]], away[two[:, 1]]) < -1.0 + FLAT
-    kind[two[straight, 0]] = JOINT
-    kind[two[straight, 1]] = COVERED
-    return np.ascontiguousarray(kind.reshape(2, -1).T)
+    joint, covered = two[straight, 0], two[straight, 1]
+    kind[joint] = JOINT
+    kind[covered] = COVERED
+    count = len(edges)
+    far = np.concatenate([edges[:, 1], edges[:, 0]])  # the other end of the edge of each end
+    joints = np.zeros((len(vertex), 3, 3))
+    joints[joint] = joints[covered] = np.stack([far[joint], np.concatenate([edges[:, 0], edges[:, 1]])[joint],
+                                                far[covered]], axis=1)
+    return (np.ascontiguousarray(kind.reshape(2, count).T),
+            np.ascontiguousarray(joints.reshape(2, count, 3, 3).transpose(1, 0, 2, 3)))
 
 
 def _unit_normals(corners: np.ndarray) -> np.ndarray:
@@ -297,7 +308,7 @@ def _forest(item_corners: list[np.ndarray]) -> tuple[np.ndarray, tuple, np.ndarr
 
 @njit(cache=True)
 def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges, flat_sides,
-               t_lower, t_upper, t_children, t_ranges, t_roots, edges, corners, e_lower, e_upper, e_children, e_ranges,
+               t_lower, t_upper, t_children, t_ranges, t_roots, edges, corners, joints, e_lower, e_upper, e_children, e_ranges,
                e_roots, every_feature):
     """Station-triangle and segment-edge pairs with a gap (mm) below the cutoff (mm) of their station or segment.
 
@@ -336,13 +347,9 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
                 continue
             for position in items_within(p, q, reach, e_lower, e_upper, e_children, e_ranges, root, stack):
                 a, b = edges[position, 0], edges[position, 1]
-                distance, _, y = _closest(nodes[i], nodes[i + 1], a, b)
-                at_end = 0 if np.all(y == a) else 1 if np.all(y == b) else -1
-                if not every_feature and at_end >= 0 and corners[position, at_end] != CORNER:
-                    if corners[position, at_end] == COVERED:
-                        continue  # beyond this edge's end the edge that continues it is nearer
-                    if distance > (1.0 + TIE) * _closest(nodes[i], nodes[i + 1], 2.0 * a - b, 2.0 * b - a)[0]:
-                        continue  # not at the joint itself
+                distance = _closest(nodes[i], nodes[i + 1], a, b)[0]
+                if not every_feature and not _edge_takes(nodes[i], nodes[i + 1], corners[position], joints[position]):
+                    continue  # beyond a straight joint, where the edge that continues this one takes the segment
                 gap = distance - hose_radius
                 if gap < cutoff:
                     kinds.append(SEGMENT_EDGE)
@@ -363,6 +370,18 @@ def _takes(x, flat_edges, flat_sides):
             end = p if np.sum((x - p) ** 2) <= np.sum((x - q) ** 2) else q
             side = flat_sides[e, 0] * np.sum(np.cross(q - p, x - end) * m)
             if side < 0.0 or (side == 0.0 and flat_sides[e, 1] < 0.0):
+                return False
+    return True
+
+
+@njit(cache=True)
+def _edge_takes(p, q, corners, joints):
+    # whether segment pq is on the edge's side of each straight joint at its ends (MeshArrays.joints)
+    for end in range(2):
+        if corners[end] != CORNER:
+            a, v, b = joints[end, 0], joints[end, 1], joints[end, 2]
+            along = np.sum((_closest(p, q, a, b)[2] - v) * (b - a))
+            if along > 0.0 if corners[end] == JOINT else along <= 0.0:
                 return False
     return True
 
