@@ -30,6 +30,8 @@ triangle's Voronoi regions and a distance tie alone left a band of 7e-5 mm (5 mm
 about each flat edge where a station paired with both triangles (a double barrier, an energy jump
 that stopped Newton on a floor of 50 x 25 mm cells).  The tests are in floating point: on a plane
 not along the axes, rounding can still decide differently within about 1e-15 mm of a vertex.
+A segment at a straight joint of two edges likewise pairs with one of them, by one side test on the
+joint's line shared by both (MeshArrays.joints), not by a distance tie.
 Kept: boundary edges, ridges, valleys, edges of three or more triangles, folds.  Triangles of zero
 area (a line) are left out; their edges stay where other triangles border them.  Exactly
 coincident vertices are merged first (a STEP file's faces and an STL's triangles do not share theirs).
