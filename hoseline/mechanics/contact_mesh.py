@@ -193,8 +193,8 @@ def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) 
 
 def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple:
     """(triangles (F, 3, 3), kept edges (E, 2, 3), features (F,), (corners (E, 2), joints (E, 2, 3, 3)), flat_edges
-    (F, 3, 3, 3), flat_sides (F, 3, 2), as in MeshArrays) of one mesh: coincident vertices merged, zero-area triangles and flat interior edges
-    left out (see the module doc)."""
+    (F, 3, 3, 3), flat_sides (F, 3, 2), as in MeshArrays) of one mesh: coincident vertices merged, zero-area
+    triangles and flat interior edges left out (see the module doc)."""
     vertices, merged = np.unique(np.asarray(vertices, dtype=float), axis=0, return_inverse=True)
     faces = merged.reshape(-1)[np.asarray(faces, dtype=np.int64)]
     faces = faces[has_area(vertices[faces])]  # model.obstacles.Mesh refuses a mesh without any
