@@ -176,6 +176,80 @@ def test_a_two_triangle_floor_gives_the_plane_s_equilibrium(hanging_hose):
     assert 0.0 < mesh[5] < mesh[3].activation and mesh[5] == pytest.approx(plane[5], rel=1e-6)
 
 
+def _grid_floor(cells, size=(800.0, 400.0), turn=0.0, shift=(0.0, 0.0)):
+    """A floor in z = 0 of cells x cells rectangles (each split along a diagonal) covering `size` mm about the origin,
+    turned by `turn` degrees about z and shifted by `shift` mm: (vertices, faces), 2 cells^2 triangles."""
+    x, y = np.meshgrid(np.linspace(-size[0] / 2, size[0] / 2, cells + 1), np.linspace(-size[1] / 2, size[1] / 2, cells + 1),
+                       indexing="ij")
+    c, s = np.cos(np.radians(turn)), np.sin(np.radians(turn))
+    vertices = np.column_stack([c * x.ravel() - s * y.ravel() + shift[0], s * x.ravel() + c * y.ravel() + shift[1],
+                                np.zeros(x.size)])
+    a = (np.arange(cells)[:, None] * (cells + 1) + np.arange(cells)[None, :]).ravel()
+    return vertices, np.concatenate([np.column_stack([a, a + cells + 1, a + cells + 2]),
+                                     np.column_stack([a, a + cells + 2, a + 1])])
+
+
+def test_a_station_over_a_grid_floor_pairs_with_one_triangle_on_its_edges_and_vertices_too():
+    # a station on a flat edge or vertex, or within rounding of one, is the triangles' there tie: one of them takes
+    # it (before, a station within about 7e-5 mm of a flat edge paired with both: a double barrier)
+    mesh = pack_meshes([_grid_floor(16)], [0])  # 50 x 25 mm cells
+    offsets = (0.0, 1e-16, -1e-16, 5e-16, -5e-16, 2e-15, -2e-15, 1e-9, -1e-9, 1e-5, -1e-5, 1e-3, -1e-3)
+    for x in (-350.0, -50.0, 0.0, 150.0, -37.5):  # vertices' x, and a diagonal's middle
+        for y in (0.0, 25.0, -175.0, 12.5):
+            for dx in offsets:
+                for dy in offsets:
+                    nodes = np.array([[-1000.0, 0.0, 100.0], [x + dx, y + dy, 5.001]])
+                    kinds, _, _, gaps = mesh.pairs(nodes, 5.0, 1.0)
+                    assert kinds.size == 1 and gaps[0] == pytest.approx(0.001, abs=1e-12), (x + dx, y + dy, gaps)
+
+
+def test_a_segment_across_a_straight_ridge_cut_into_rows_pairs_with_one_of_its_edges_at_the_joint():
+    # a roof of two rows: its ridge is two edges in a straight line, the joint at the origin; a segment across the
+    # ridge at y from the joint pairs with one of them (before, with both within about 7e-5 mm on one side)
+    vertices = np.array([[x, y, -abs(x) / 5.0] for y in (-10.0, 0.0, 10.0) for x in (-5.0, 0.0, 5.0)])
+    faces = np.array([[a, a + 1, a + 4] for a in (0, 1, 3, 4)] + [[a, a + 4, a + 3] for a in (0, 1, 3, 4)])
+    mesh = pack_meshes([(vertices, faces)], [0])
+    for y in (0.0, 1e-16, -1e-16, 1e-8, -1e-8, 1e-5, -1e-5, 1e-3, -1e-3, 3.0, -3.0):
+        kinds, _, _, gaps = mesh.pairs(np.array([[-3.0, y, 5.001], [3.0, y, 5.001]]), 5.0, 1.0)
+        assert np.count_nonzero(kinds == SEGMENT_EDGE) == 1, y
+        assert gaps[kinds == SEGMENT_EDGE][0] == pytest.approx(0.001, abs=1e-12)
+
+
+HEAVY_HOSE = {"hose": {"length": 400.0, "outer_diameter": 10.0, "bending_stiffness": 500.0, "torsional_stiffness": 500.0,
+                       "mass_per_length": 0.5, "segments": 30},
+              "start": {"point": [-150.0, 0.0, 150.0], "direction": [1.0, 0.0, 0.0]},
+              "end": {"point": [150.0, 0.0, 50.0], "direction": [-1.0, 0.0, 0.0]},
+              "environment": {"gravity": [0.0, 0.0, -9.81]},
+              "contact": {"obstacles": [{"kind": "plane", "point": [0, 0, 0], "normal": [0, 0, 1], "name": "floor"}]}}
+
+
+@pytest.fixture(scope="module")
+def lowered_onto_the_plane():
+    from hoseline.io.problem_file import problem_from_dict
+    from hoseline.procedures.placement.sequence import solve
+
+    problem = problem_from_dict(HEAVY_HOSE)
+    return problem, solve(problem, estimate_error=False)
+
+
+@pytest.mark.parametrize("cells, turn, shift", [(16, 0.0, (0.0, 0.0)), (32, 0.0, (0.0, 0.0)), (16, 10.0, (3.7, 5.3)),
+                                                (16, -np.degrees(np.arctan(0.5)), (0.0, 0.0))],
+                         ids=["512-along-an-edge-line", "2048", "512-turned-and-shifted", "512-along-diagonals"])
+def test_a_heavy_hose_lowered_onto_a_grid_floor_rests_as_on_the_plane(lowered_onto_the_plane, cells, turn, shift):
+    # the hose lies in y = 0 from a start at x = -150: with 50 x 25 mm cells on a grid line through vertices,
+    # turned by -atan(1/2) along the cells' diagonals; the 512-triangle floor failed to place before
+    from hoseline.model.obstacles import Mesh
+    from hoseline.procedures.placement.sequence import solve
+
+    problem, plane = lowered_onto_the_plane
+    mesh = solve(replace(problem, contact=(Mesh(*_grid_floor(cells, turn=turn, shift=shift), "floor"),)),
+                 estimate_error=False)
+    assert np.max(np.abs(mesh.centerline - plane.centerline)) < 1e-7  # mm; measured 8.8e-9
+    assert mesh.contacts[0].total_force[2] == pytest.approx(plane.contacts[0].total_force[2], rel=5e-7)  # 5.6e-8
+    assert mesh.contacts[0].gap.size == plane.contacts[0].gap.size == 5 and mesh.stable
+    assert mesh.contacts[0].min_gap == pytest.approx(plane.contacts[0].min_gap, rel=1e-6)
+
+
 def _faceted_drum(facets, rows=1, radius=40.0, half_length=200.0):
     """A cylinder of `radius` about the y axis cut into `facets` flat sides (vertices on the circle) and `rows`
     rings: (vertices, faces), 2 facets rows triangles."""

@@ -14,8 +14,24 @@ Left out, so that a flat surface pushes only along its normal and each station c
 edge between two triangles in one plane that continue each other (a floor's or a box face's
 diagonal: over a flat region the distance of a point of a segment is linear along it, smallest at a
 station), and a triangle's edge and vertex regions at such flat features (the neighbour across is
-nearer; on the feature itself, a tie, one triangle there pairs: MeshArrays.features); likewise an
-edge's end where exactly two edges continue each other in a straight line (MeshArrays.corners).
+nearer: MeshArrays.features); likewise an edge's end where exactly two edges continue each other in
+a straight line (MeshArrays.corners).
+Over a flat region each station pairs with exactly one triangle, also on a flat edge or vertex (a
+hose lying along a grid line of a floor): each flat edge is given one orientation test, evaluated
+bit for bit alike for both its triangles with the opposite sign (from the edge's end nearer the
+station, so that near a vertex every edge there sees the same offset), and a triangle pairs at its
+face or at a flat feature only if the station is on its side of each of its flat edges
+(MeshArrays.flat_edges); on an edge itself (the test zero) the triangle on the side of a fixed
+direction w takes it, as if the station were moved by an infinitesimal w (simulation of simplicity),
+so at a vertex too one triangle takes it.  A triangle that takes a station its Voronoi regions put
+beyond a flat feature (by rounding) measures it from that feature, the plane's distance to rounding,
+so the energy does not jump where a station passes from one triangle to the next.  Deciding by each
+triangle's Voronoi regions and a distance tie alone left a band of 7e-5 mm (5 mm above the face)
+about each flat edge where a station paired with both triangles (a double barrier, an energy jump
+that stopped Newton on a floor of 50 x 25 mm cells).  The tests are in floating point: on a plane
+not along the axes, rounding can still decide differently within about 1e-15 mm of a vertex.
+A segment at a straight joint of two edges likewise pairs with one of them, by one side test on the
+joint's line shared by both (MeshArrays.joints), not by a distance tie.
 Kept: boundary edges, ridges, valleys, edges of three or more triangles, folds.  Triangles of zero
 area (a line) are left out; their edges stay where other triangles border them.  Exactly
 coincident vertices are merged first (a STEP file's faces and an STL's triangles do not share theirs).
@@ -68,8 +84,7 @@ from hoseline.mechanics.contact import (
 from hoseline.model.obstacles import has_area
 
 FLAT = 1e-9  # sine of the angle below which two triangles sharing an edge lie in one plane
-TIE = 1e-10  # relative: a station this near a flat feature is on it (a tie)
-TIE_BITS = 8  # MeshArrays.features: bit f for a feature always paired at, bit f + TIE_BITS for one paired at on a tie
+TIE_DIRECTIONS = np.array([[0.5257, 0.7236, 0.4472], [0.8017, -0.2673, 0.5345]])  # w, and w' for an edge along w (any fixed)
 COVERED, JOINT, CORNER = 0, 1, 2  # MeshArrays.corners: what an edge's end is
 
 
@@ -83,26 +98,38 @@ class MeshArrays:
 
     triangles (F, 3, 3): corners, in tree order, mesh after mesh.  normals (F, 3): unit normals.
     features (F,): bit 1 << f set for each closest feature f (contact.FACE, EDGE_AB, ..., VERTEX_C) of the
-    triangle a station pairs with it at: its face, its kept edges, its vertices on kept edges; bit f + TIE_BITS
-    for a flat feature it pairs at only on a tie (the station on that feature).
+    triangle a station pairs with it at: its face, its kept edges, its vertices on kept edges; at its face and
+    its other (flat) features only where flat_edges give the station to it.
+    flat_edges (F, 3, 3, 3): for each edge of each triangle that is flat (left out), its ends p, q in the order
+    of their vertex indices and m, the sum of its two triangles' normals (shared by both, so that the test
+    ((q - p) x (x - e)) . m of a station x, e the end nearer x, is bit for bit the same from either); flat_sides
+    (F, 3, 2): the sign
+    s of that test on the triangle's side (0: not a flat edge) and, for a station on the edge (test zero),
+    +1 if the triangle takes it, else -1 (the sign of s ((q - p) x w) . m, TIE_DIRECTIONS).
     triangle_tree: (lower (M, 3), upper (M, 3), children (M, 2), ranges (M, 2)) of every mesh's tree,
     node and item indices global.  triangle_roots (K,): the root node of each mesh's tree.
     triangle_mesh (F,): the mesh of each triangle.  edges (E, 2, 3), edge_tree, edge_roots, edge_mesh:
     the same for the kept edges (-1 as root: a mesh without kept edges).  corners (E, 2): CORNER, JOINT or
-    COVERED for each end of an edge (_edge_corners): a segment pairs with an edge at a corner, not where
-    the edge continues straight on into another (that one is as near, and the end would push the hose
-    along the edge) but on a tie at the joint itself, there with one of the two.
+    COVERED for each end of an edge (_edge_corners): a segment pairs with an edge at a corner, but where the
+    edge continues straight on into another (that one is as near, and the end would push the hose along the
+    edge) only on its side of the joint.  joints (E, 2, 3, 3): for such an end, the joint (A, V, B): V the
+    shared vertex, A the JOINT edge's other end, B the COVERED edge's, the same for both; the side is that of
+    (y - V) . (B - A), y the point of the line AB nearest the segment (the same bits from either edge), and
+    the JOINT edge takes a segment on the joint itself (zero).
     owners (K,): index of each mesh's obstacle in ContactModel.names.
     """
 
     triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
     features: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    flat_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3, 3)))
+    flat_sides: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 2)))
     normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     triangle_tree: tuple = field(default_factory=_empty_tree)
     triangle_roots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     triangle_mesh: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 3)))
     corners: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    joints: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 3, 3)))
     edge_tree: tuple = field(default_factory=_empty_tree)
     edge_roots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     edge_mesh: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
@@ -125,8 +152,9 @@ class MeshArrays:
         step filter must watch: a step can carry the hose to where they are the nearest."""
         if np.isscalar(cutoffs):
             cutoffs = (np.full(nodes.shape[0], float(cutoffs)), np.full(nodes.shape[0] - 1, float(cutoffs)))
-        return mesh_pairs(nodes, hose_radius, *cutoffs, self.triangles, self.features, *self.triangle_tree,
-                          self.triangle_roots, self.edges, self.corners, *self.edge_tree, self.edge_roots, every_feature)
+        return mesh_pairs(nodes, hose_radius, *cutoffs, self.triangles, self.features, self.flat_edges, self.flat_sides,
+                          *self.triangle_tree, self.triangle_roots, self.edges, self.corners, self.joints,
+                          *self.edge_tree, self.edge_roots, every_feature)
 
     def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
                      bound: float) -> tuple[np.ndarray, np.ndarray]:
@@ -147,12 +175,15 @@ def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) 
     return MeshArrays(
         triangles=triangles,
         features=np.concatenate([part[2] for part in parts])[order],
+        flat_edges=np.concatenate([part[4] for part in parts])[order],
+        flat_sides=np.concatenate([part[5] for part in parts])[order],
         normals=_unit_normals(triangles),
         triangle_tree=triangle_tree,
         triangle_roots=triangle_roots,
         triangle_mesh=np.repeat(np.arange(len(parts)), [len(part[0]) for part in parts]),
         edges=edges,
-        corners=np.concatenate([part[3] for part in parts])[edge_order],
+        corners=np.concatenate([part[3][0] for part in parts])[edge_order],
+        joints=np.concatenate([part[3][1] for part in parts])[edge_order],
         edge_tree=edge_tree,
         edge_roots=edge_roots,
         edge_mesh=np.repeat(np.arange(len(parts)), [len(part[1]) for part in parts]),
@@ -160,9 +191,10 @@ def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) 
     )
 
 
-def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(triangles (F, 3, 3), kept edges (E, 2, 3), features (F,) as MeshArrays.features) of one mesh: coincident
-    vertices merged, zero-area triangles and flat interior edges left out (see the module doc)."""
+def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple:
+    """(triangles (F, 3, 3), kept edges (E, 2, 3), features (F,), (corners (E, 2), joints (E, 2, 3, 3)), flat_edges
+    (F, 3, 3, 3), flat_sides (F, 3, 2), as in MeshArrays) of one mesh: coincident vertices merged, zero-area
+    triangles and flat interior edges left out (see the module doc)."""
     vertices, merged = np.unique(np.asarray(vertices, dtype=float), axis=0, return_inverse=True)
     faces = merged.reshape(-1)[np.asarray(faces, dtype=np.int64)]
     faces = faces[has_area(vertices[faces])]  # model.obstacles.Mesh refuses a mesh without any
@@ -187,31 +219,43 @@ def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np
     coplanar = np.linalg.norm(np.cross(n1, n2), axis=1) < FLAT
     continued = (np.einsum("ij,ij->i", vertices[opposite[pairs]] - a, along)
                  * np.einsum("ij,ij->i", vertices[opposite[pairs + 1]] - a, along)) < 0.0
-    keep[counts == 2] = ~(coplanar & continued)
+    flat = coplanar & continued
+    keep[counts == 2] = ~flat
     kept_edges = ends[starts[keep]]
     # which features of each triangle a station pairs at: over a flat edge or a vertex amid a flat region the
-    # neighbour across it is nearer, and its edge region would push the hose along the surface; on such a
-    # feature itself (a tie) one triangle of those that meet there pairs, so that the station counts once
-    kept_record, owns_record = np.empty(len(ends), bool), np.empty(len(ends), bool)
-    kept_record[order], owns_record[order] = keep[np.cumsum(new_edge) - 1], new_edge
+    # neighbour across it is nearer, and its edge region would push the hose along the surface
+    kept_record = np.empty(len(ends), bool)
+    kept_record[order] = keep[np.cumsum(new_edge) - 1]
     on_kept_edge = np.zeros(len(vertices), bool)
     on_kept_edge[kept_edges.reshape(-1)] = True
-    first_face = np.full(len(vertices), count)
-    for corner in range(3):
-        np.minimum.at(first_face, faces[:, corner], np.arange(count))
     always = np.stack([np.ones(count, bool), *kept_record.reshape(3, count)[[0, 2, 1]], *on_kept_edge[faces].T])
-    tie = np.stack([np.zeros(count, bool), *owns_record.reshape(3, count)[[0, 2, 1]],
-                    *(first_face[faces] == np.arange(count)[:, None]).T]) & ~always
     shifts = np.array([FACE, EDGE_AB, EDGE_AC, EDGE_BC, VERTEX_A, VERTEX_B, VERTEX_C])[:, None]
-    features = np.sum((always.astype(np.int64) << shifts) | (tie.astype(np.int64) << (shifts + TIE_BITS)), axis=0)
+    features = np.sum(always.astype(np.int64) << shifts, axis=0)
     edges = np.stack([vertices[kept_edges[:, 0]], vertices[kept_edges[:, 1]]], axis=1)
-    return corners, edges, features.astype(np.int64), _edge_corners(kept_edges, edges)
+    # the side of each flat edge each of its two triangles takes: (triangle, its edge 0 ab, 1 bc, 2 ca, opposite vertex)
+    sides = [(owner[pairs[flat] + k], order[pairs[flat] + k] // count, vertices[opposite[pairs[flat] + k]]) for k in (0, 1)]
+    flat_edges, flat_sides = _flat_edges(count, a[flat], b[flat], (n1 + n2)[flat], sides)
+    return corners, edges, features, _edge_corners(kept_edges, edges), flat_edges, flat_sides
 
 
-def _edge_corners(ends: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """(E, 2) int: what each end of the edges (vertex indices `ends` (E, 2), points `edges` (E, 2, 3)) is: CORNER,
-    or where exactly two edges continue each other in a straight line, JOINT for one of them, COVERED for the
-    other (a segment pairs with the JOINT end only when nearest the joint itself)."""
+def _flat_edges(count: int, p: np.ndarray, q: np.ndarray, m: np.ndarray, sides: list) -> tuple[np.ndarray, np.ndarray]:
+    """(flat_edges (count, 3, 3, 3), flat_sides (count, 3, 2)) as MeshArrays of the flat edges from p to q ((n, 3) mm,
+    in vertex index order) with the sums m of their triangles' normals; sides: for each of an edge's two triangles
+    (triangle (n,), edge slot (n,), opposite vertex (n, 3) mm)."""
+    flat_edges, flat_sides = np.zeros((count, 3, 3, 3)), np.zeros((count, 3, 2))
+    on_edge = np.einsum("ij,ij->i", np.cross(q - p, TIE_DIRECTIONS[0]), m)
+    on_edge = np.where(on_edge != 0.0, on_edge, np.einsum("ij,ij->i", np.cross(q - p, TIE_DIRECTIONS[1]), m))
+    for triangle, slot, vertex in sides:
+        side = np.sign(np.einsum("ij,ij->i", np.cross(q - p, vertex - p), m))
+        flat_edges[triangle, slot] = np.stack([p, q, m], axis=1)
+        flat_sides[triangle, slot] = np.column_stack([side, side * np.sign(on_edge)])
+    return flat_edges, flat_sides
+
+
+def _edge_corners(ends: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(corners (E, 2) int, joints (E, 2, 3, 3) mm) of the edges (vertex indices `ends` (E, 2), points `edges`
+    (E, 2, 3)), as MeshArrays: each end a CORNER, or where exactly two edges continue each other in a straight
+    line, JOINT for one of them and COVERED for the other, both with the joint (A, V, B)."""
     directions = (edges[:, 1] - edges[:, 0]) / np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1)[:, None]
     vertex = ends.T.reshape(-1)  # the first ends, then the second ends
     away = np.concatenate([directions, -directions])  # from the vertex along the edge
@@ -220,9 +264,16 @@ def _edge_corners(ends: np.ndarray, edges: np.ndarray) -> np.ndarray:
     kind = np.full(len(vertex), CORNER)
     two = order[counts[order] == 2].reshape(-1, 2)  # the two edge ends at each vertex of two edges
     straight = np.einsum("ij,ij->i", away[two[:, 0]], away[two[:, 1]]) < -1.0 + FLAT
-    kind[two[straight, 0]] = JOINT
-    kind[two[straight, 1]] = COVERED
-    return np.ascontiguousarray(kind.reshape(2, -1).T)
+    joint, covered = two[straight, 0], two[straight, 1]
+    kind[joint] = JOINT
+    kind[covered] = COVERED
+    count = len(edges)
+    far = np.concatenate([edges[:, 1], edges[:, 0]])  # the other end of the edge of each end
+    joints = np.zeros((len(vertex), 3, 3))
+    joints[joint] = joints[covered] = np.stack([far[joint], np.concatenate([edges[:, 0], edges[:, 1]])[joint],
+                                                far[covered]], axis=1)
+    return (np.ascontiguousarray(kind.reshape(2, count).T),
+            np.ascontiguousarray(joints.reshape(2, count, 3, 3).transpose(1, 0, 2, 3)))
 
 
 def _unit_normals(corners: np.ndarray) -> np.ndarray:
@@ -258,8 +309,9 @@ def _forest(item_corners: list[np.ndarray]) -> tuple[np.ndarray, tuple, np.ndarr
 
 
 @njit(cache=True)
-def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, t_lower, t_upper, t_children,
-               t_ranges, t_roots, edges, corners, e_lower, e_upper, e_children, e_ranges, e_roots, every_feature):
+def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges, flat_sides,
+               t_lower, t_upper, t_children, t_ranges, t_roots, edges, corners, joints, e_lower, e_upper, e_children, e_ranges,
+               e_roots, every_feature):
     """Station-triangle and segment-edge pairs with a gap (mm) below the cutoff (mm) of their station or segment.
 
     nodes (N+1, 3) mm (station 0 is held: not paired); station_cutoffs (N+1,), segment_cutoffs (N,) mm.
@@ -279,12 +331,9 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
                 u, v, feature = triangle_parameters(nodes[k], a, b, c)
                 r = nodes[k] - ((1.0 - u - v) * a + u * b + v * c)
                 distance = np.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
-                if not every_feature and not (features[position] >> feature) & 1:
-                    if not (features[position] >> (feature + TIE_BITS)) & 1:
-                        continue  # beside the triangle, over a neighbour in its plane
-                    normal = np.cross(b - a, c - a)
-                    if distance > (1.0 + TIE) * abs(np.sum(normal * (nodes[k] - a))) / np.sqrt(np.sum(normal * normal)):
-                        continue  # not on the flat feature it owns
+                if not every_feature and (feature == FACE or not (features[position] >> feature) & 1):
+                    if not _takes(nodes[k], flat_edges[position], flat_sides[position]):
+                        continue  # over a neighbour in its plane, or on the flat edge or vertex it gives to another
                 gap = distance - hose_radius
                 if gap < cutoff:
                     kinds.append(STATION_TRIANGLE)
@@ -300,13 +349,9 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
                 continue
             for position in items_within(p, q, reach, e_lower, e_upper, e_children, e_ranges, root, stack):
                 a, b = edges[position, 0], edges[position, 1]
-                distance, _, y = _closest(nodes[i], nodes[i + 1], a, b)
-                at_end = 0 if np.all(y == a) else 1 if np.all(y == b) else -1
-                if not every_feature and at_end >= 0 and corners[position, at_end] != CORNER:
-                    if corners[position, at_end] == COVERED:
-                        continue  # beyond this edge's end the edge that continues it is nearer
-                    if distance > (1.0 + TIE) * _closest(nodes[i], nodes[i + 1], 2.0 * a - b, 2.0 * b - a)[0]:
-                        continue  # not at the joint itself
+                distance = _closest(nodes[i], nodes[i + 1], a, b)[0]
+                if not every_feature and not _edge_takes(nodes[i], nodes[i + 1], corners[position], joints[position]):
+                    continue  # beyond a straight joint, where the edge that continues this one takes the segment
                 gap = distance - hose_radius
                 if gap < cutoff:
                     kinds.append(SEGMENT_EDGE)
@@ -315,6 +360,32 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
                     gaps.append(gap)
     return (np.array(kinds, dtype=np.int64), np.array(first, dtype=np.int64), np.array(second, dtype=np.int64),
             np.array(gaps, dtype=np.float64))
+
+
+@njit(cache=True)
+def _takes(x, flat_edges, flat_sides):
+    # whether the station x (mm) is on the triangle's side of each of its flat edges, on an edge by the tie rule;
+    # x is taken from the edge's end nearer to it, so that near a vertex every edge there sees the same x - vertex
+    for e in range(3):
+        if flat_sides[e, 0] != 0.0:
+            p, q, m = flat_edges[e, 0], flat_edges[e, 1], flat_edges[e, 2]
+            end = p if np.sum((x - p) ** 2) <= np.sum((x - q) ** 2) else q
+            side = flat_sides[e, 0] * np.sum(np.cross(q - p, x - end) * m)
+            if side < 0.0 or (side == 0.0 and flat_sides[e, 1] < 0.0):
+                return False
+    return True
+
+
+@njit(cache=True)
+def _edge_takes(p, q, corners, joints):
+    # whether segment pq is on the edge's side of each straight joint at its ends (MeshArrays.joints)
+    for end in range(2):
+        if corners[end] != CORNER:
+            a, v, b = joints[end, 0], joints[end, 1], joints[end, 2]
+            along = np.sum((_closest(p, q, a, b)[2] - v) * (b - a))
+            if along > 0.0 if corners[end] == JOINT else along <= 0.0:
+                return False
+    return True
 
 
 @njit(cache=True)
