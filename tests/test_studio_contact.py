@@ -124,3 +124,32 @@ def test_opening_another_problem_replaces_the_contact_obstacles_shown():
     session = Session(resting_hose())
     session.open_problem(replace(resting_hose(contact=False), name="free"))
     assert session.obstacles == []
+
+
+def test_a_box_under_the_hose_is_drawn_as_its_triangles_and_carries_it_as_the_floor_does(dragged_on_the_floor):
+    """The floor as the top face of a [contact] box: the page draws the box's 12 triangles, and the dragged hose
+    rests on it as on the analytic plane (the same push, to the barrier's accuracy)."""
+    data = problem_to_dict(resting_hose(contact=False))
+    data["contact"] = {"obstacles": [{"kind": "box", "center": [0.0, 0.0, -10.0], "size": [800.0, 400.0, 20.0],
+                                      "name": "block"}]}
+    session = Session(problem_from_dict(data))
+    dragged(session, [-20.0, 15.0, -20.0])
+    [block] = session.obstacles
+    assert len(block.obstacle.faces) == 12 and block.obstacle.clearance == 0.0
+    result = session.result()
+    assert np.min(result.centerline[:, 2]) >= RADIUS
+    floor = dragged_on_the_floor[0].result().contacts[0]
+    np.testing.assert_allclose(result.contacts[0].total_force, floor.total_force, rtol=1e-4, atol=1e-9)
+
+
+def test_a_drag_keeps_the_contact_models_search_trees_and_a_slider_its_stiffness_follows():
+    """The contact model is built once per set of obstacles: a drag reuses it, a heavier hose changes only the
+    barrier's stiffness (the reference pressure grows with the weight)."""
+    data = problem_to_dict(resting_hose(contact=False))
+    data["contact"] = {"obstacles": [{"kind": "box", "center": [0.0, 0.0, -10.0], "size": [800.0, 400.0, 20.0]}]}
+    session = Session(problem_from_dict(data))
+    built = session.tracker.contact
+    dragged(session, [0.0, 0.0, -4.0])
+    assert session.tracker.contact.mesh is built.mesh and session.tracker.contact.stiffness == built.stiffness
+    session.apply(Target(type="set", seq=9, hose={"mass_per_length": 2.0 * MASS}))
+    assert session.tracker.contact.mesh is built.mesh and session.tracker.contact.stiffness > built.stiffness

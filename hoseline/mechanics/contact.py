@@ -42,6 +42,8 @@ import math
 import numpy as np
 from numba import njit
 
+from hoseline.mechanics.self_pairs import near_segment_pairs
+
 STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT, STATION_TRIANGLE, SEGMENT_EDGE = 0, 1, 2, 3, 4, 5
 PAIR_KINDS = ("station-plane", "segment-ball", "segment-capsule", "segment-segment", "station-triangle", "segment-edge")
 STATION_KINDS = (STATION_PLANE, STATION_TRIANGLE)  # pairs whose hose primitive is a station, not a segment
@@ -277,7 +279,11 @@ def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutof
     j - i > self_exclusion; negative: no self-contact.
     """
     n_seg = nodes.shape[0] - 1
-    capacity = n_seg * (planes.shape[0] + balls.shape[0] + capsules.shape[0]) + (n_seg * n_seg if self_exclusion >= 0 else 0)
+    if self_exclusion >= 0:  # the broad phase: only segments whose boxes come within the reach (self_pairs.py)
+        near_first, near_second = near_segment_pairs(nodes, self_exclusion, cutoff + 2.0 * hose_radius)
+    else:
+        near_first, near_second = np.zeros(0, np.int64), np.zeros(0, np.int64)
+    capacity = n_seg * (planes.shape[0] + balls.shape[0] + capsules.shape[0]) + near_first.shape[0]
     kinds = np.empty(capacity, np.int64)
     first = np.empty(capacity, np.int64)
     second = np.empty(capacity, np.int64)
@@ -301,12 +307,12 @@ def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutof
             if d - hose_radius - radius < cutoff:
                 kinds[count], first[count], second[count], gaps[count] = SEGMENT_CAPSULE, i, j, d - hose_radius - radius
                 count += 1
-        if self_exclusion >= 0:
-            for j in range(i + self_exclusion + 1, n_seg):
-                d, _ = _pair_distance(SEGMENT_SEGMENT, i, j, nodes, planes, balls, capsules, no_triangles, no_edges)
-                if d - 2.0 * hose_radius < cutoff:
-                    kinds[count], first[count], second[count], gaps[count] = SEGMENT_SEGMENT, i, j, d - 2.0 * hose_radius
-                    count += 1
+    for p in range(near_first.shape[0]):
+        i, j = near_first[p], near_second[p]
+        d, _ = _pair_distance(SEGMENT_SEGMENT, i, j, nodes, planes, balls, capsules, no_triangles, no_edges)
+        if d - 2.0 * hose_radius < cutoff:
+            kinds[count], first[count], second[count], gaps[count] = SEGMENT_SEGMENT, i, j, d - 2.0 * hose_radius
+            count += 1
     return kinds[:count].copy(), first[:count].copy(), second[:count].copy(), gaps[:count].copy()
 
 

@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
-from threadpoolctl import ThreadpoolController
 
+from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.banded import NEUTRAL, band_to_dense, banded_matvec
 from hoseline.mechanics.clipped import unknown_layout
 from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
@@ -59,17 +59,6 @@ from hoseline.mechanics.rod import Clamps, RodState, centerline
 
 SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
 SWEPT_EVALUATIONS = 256  # distances per segment-edge pair in the swept check of a step (contact_mesh.swept_edges_clear)
-
-
-_CONTROLLER: list[ThreadpoolController] = []
-
-
-def _blas_threads() -> ThreadpoolController:
-    """The BLAS thread pools, found once: a ThreadpoolController scans the loaded libraries when made
-    (about 1 ms), which a sweep pose must not pay each time."""
-    if not _CONTROLLER:
-        _CONTROLLER.append(ThreadpoolController())
-    return _CONTROLLER[0]
 
 
 @dataclass(frozen=True)
@@ -359,7 +348,7 @@ def solve_with_contact(
     One BLAS thread: the dense systems are small, and threads only contend for the cores (10x
     slower on a loaded two-core machine).
     """
-    with _blas_threads().limit(limits=1):
+    with one_blas_thread():
         return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations)
 
 
@@ -419,7 +408,7 @@ def minimise_with_contact(
     ones, so the method ends as plain Newton at a stable minimum.  Returns the final state and a
     report as solve_with_contact; tolerance: relative residual.
     """
-    with _blas_threads().limit(limits=1):
+    with one_blas_thread():
         return _minimise_with_contact(props, clamps, state, model, tolerance, max_iterations)
 
 

@@ -11,6 +11,7 @@ barrier's Hessian, and a last check that nothing penetrates.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import scipy.linalg
@@ -18,7 +19,7 @@ import scipy.linalg
 from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.banded import NEUTRAL
 from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_KINDS
-from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact
+from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact, self_exclusion
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.model.problem import Problem
@@ -27,11 +28,13 @@ from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.result import ObstacleContact, Result
 
 
-def problem_contact_model(problem: Problem) -> ContactModel:
+def problem_contact_model(problem: Problem, reuse: ContactModel | None = None) -> ContactModel:
     """The ContactModel of the problem's obstacles (and self-contact) with the reference pressure of its hose.
 
     The bend length (model.bend_length) is the shortest of the hose length and R + r over round
     obstacles; with self-contact also pi r, the tightest U-turn of two touching passes.
+    reuse: a model of the same obstacles, self-contact and hose radius (its primitives and meshes' search
+    trees are kept; only the barrier stiffness and the self-contact exclusion follow the hose).
     """
     hose = problem.hose
     weight = hose.mass_per_length * float(np.linalg.norm(problem.gravity)) * 1e-3  # kg/m * m/s^2 = N/m -> N/mm
@@ -39,6 +42,9 @@ def problem_contact_model(problem: Problem) -> ContactModel:
     if problem.self_contact:
         length = min(length, math.pi * hose.outer_radius)
     pressure = reference_pressure(weight, float(np.max(hose.stiffness_vector[:2])), length)
+    if reuse is not None:
+        exclusion = self_exclusion(hose.outer_radius, hose.segment_length) if problem.self_contact else -1
+        return replace(reuse, stiffness=pressure / reuse.activation, self_exclusion=exclusion)
     return contact_model(problem.contact, hose.outer_radius, hose.segment_length, pressure,
                          self_contact=problem.self_contact)
 

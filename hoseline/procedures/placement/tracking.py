@@ -142,7 +142,7 @@ class Tracker:
         before = self.centerline
         logged, counted = len(self.log.events), self.log.iterations
         state = self.state
-        contact = _contact_model(problem)  # its barrier stiffness follows the hose's weight and stiffness
+        contact = _contact_model(problem, self.problem, self.contact)  # its stiffness follows the hose
         try:
             if not _same_properties(props, self.props):
                 state = self._change_properties(self.props, props, self.clamps, state, contact)
@@ -243,9 +243,17 @@ class Tracker:
         return found
 
 
-def _contact_model(problem: Problem) -> ContactModel | None:
-    """The contact model of `problem`'s obstacles and self-contact, or None without contact."""
-    return contact_placement.problem_contact_model(problem) if problem.has_contact else None
+def _contact_model(problem: Problem, before: Problem | None = None, model: ContactModel | None = None
+                   ) -> ContactModel | None:
+    """The contact model of `problem`'s obstacles and self-contact, or None without contact; `model`, the one of
+    `before`, is reused when the obstacles (the same objects), self-contact and hose radius are (a mesh's search
+    trees are not built again at every step)."""
+    if not problem.has_contact:
+        return None
+    same = (model is not None and before is not None and problem.self_contact == before.self_contact
+            and problem.hose.outer_radius == before.hose.outer_radius and len(problem.contact) == len(before.contact)
+            and all(a is b for a, b in zip(problem.contact, before.contact)))
+    return contact_placement.problem_contact_model(problem, model if same else None)
 
 
 def twisted(frame: np.ndarray, twist_deg: float) -> np.ndarray:
