@@ -69,19 +69,32 @@ def test_node_gradient_and_hessian_against_finite_differences(kind):
         kinds, first, second = kinds[chosen], first[chosen], second[chosen]
     assert kinds.size > 0
     weight, d_hat = 1.7, 3 * D_HAT
-    energy, grad, hess, *_ = node_terms(nodes, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
+
+    def terms(at):
+        return node_terms(at, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
+
+    assert_node_derivatives(terms, nodes, relative=True)
+
+
+def assert_node_derivatives(terms, nodes, relative: bool = False) -> None:
+    """The node gradient of terms(nodes) (contact.node_terms' energy, gradient, Hessian, ...) against central
+    differences of its energy, its node Hessian against central differences of the gradient; the absolute
+    tolerances scaled by the energy and the Hessian's size when `relative`."""
+    energy, grad, hess, *_ = terms(nodes)
     assert energy > 0.0
+    grad_atol = 1e-7 * (1 + abs(energy)) if relative else 1e-7
+    hess_atol = 1e-5 * (1 + np.max(np.abs(hess))) if relative else 1e-5
     step = 1e-6
     for k in range(nodes.shape[0]):
         for x in range(3):
             plus, minus = nodes.copy(), nodes.copy()
             plus[k, x] += step
             minus[k, x] -= step
-            e_p, g_p, *_ = node_terms(plus, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
-            e_m, g_m, *_ = node_terms(minus, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
-            assert grad[k, x] == pytest.approx((e_p - e_m) / (2 * step), rel=1e-5, abs=1e-7 * (1 + abs(energy)))
-            np.testing.assert_allclose(hess[:, k, :, x], (g_p - g_m) / (2 * step), rtol=1e-4,
-                                       atol=1e-5 * (1 + np.max(np.abs(hess))))
+            e_p, g_p, *_ = terms(plus)
+            e_m, g_m, *_ = terms(minus)
+            assert grad[k, x] == pytest.approx((e_p - e_m) / (2 * step), rel=1e-5, abs=grad_atol)
+            np.testing.assert_allclose(hess[:, k, :, x], (g_p - g_m) / (2 * step), rtol=1e-4, atol=hess_atol,
+                                       err_msg=f"station {k}, axis {x}")
 
 
 def test_rotation_gradient_and_hessian_against_finite_differences():

@@ -4,6 +4,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from test_contact_derivatives import assert_node_derivatives
 
 from hoseline.mechanics.contact import (
     EDGE_AB,
@@ -34,19 +35,7 @@ def _terms(nodes, triangles, edges, kinds, first, second):
 def _check_against_finite_differences(nodes, triangles, edges, kind, first, second):
     """Gradient against central differences of the energy, Hessian against central differences of the gradient."""
     pair = np.array([kind]), np.array([first]), np.array([second])
-    energy, grad, hess, *_ = _terms(nodes, triangles, edges, *pair)
-    assert energy > 0.0
-    step = 1e-6
-    for k in range(nodes.shape[0]):
-        for x in range(3):
-            plus, minus = nodes.copy(), nodes.copy()
-            plus[k, x] += step
-            minus[k, x] -= step
-            e_p, g_p, *_ = _terms(plus, triangles, edges, *pair)
-            e_m, g_m, *_ = _terms(minus, triangles, edges, *pair)
-            assert grad[k, x] == pytest.approx((e_p - e_m) / (2 * step), rel=1e-5, abs=1e-7)
-            numeric = (g_p - g_m) / (2 * step)
-            assert np.allclose(hess[:, k, :, x], numeric, rtol=1e-4, atol=1e-5), (k, x)
+    assert_node_derivatives(lambda at: _terms(at, triangles, edges, *pair), nodes)
 
 
 def _station_over(feature, rng):
