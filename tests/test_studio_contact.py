@@ -12,7 +12,6 @@ import pytest
 from hoseline.io.problem_file import load_problem, problem_from_dict, problem_to_dict
 from hoseline.io.sweep_file import sweep_from_dict
 from hoseline.procedures.sweep.quasi_static import run_sweep
-from hoseline.model.motion import matrix_quaternion
 from hoseline.procedures.placement.sequence import solve
 from hoseline.studio.messages import Target
 from hoseline.studio.session import Session

@@ -142,7 +142,6 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validat
 from hoseline.model.hose import (
     DEFAULT_POISSON_RATIO,
     DEFAULT_SEGMENTS,
-    MIN_SEGMENTS,
     Hose,
     bending_stiffness_from_modulus,
     isotropic_torsional_stiffness,

@@ -40,7 +40,7 @@ import numpy as np
 import scipy.linalg.lapack as lapack
 from numba import njit
 
-from hoseline.mechanics.banded import NEUTRAL, banded_matvec, count_negative, ldlt_banded
+from hoseline.mechanics.banded import banded_matvec, count_negative, ldlt_banded
 from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_PLANE, STATION_TRIANGLE
 
 DROPPED = 1e-13  # eigenvalues of a group's station Hessian below this fraction of its largest are rounding

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hoseline.model.obstacles import Cylinder, Obstacle, Plane, Sphere
+from hoseline.model.obstacles import Box, Cylinder, Mesh, Obstacle, Plane, Sphere
 from hoseline.model.problem import Problem
 from hoseline.model.sweep import Obstacle as MeshObstacle
 
@@ -55,10 +55,8 @@ def _mesh(obstacle: Obstacle, centre: np.ndarray, extent: float) -> MeshObstacle
         rotation[:3, 3] = 0.5 * (obstacle.start + obstacle.end)
         mesh.apply_transform(rotation)
         vertices, faces = mesh.vertices, mesh.faces
-    elif getattr(obstacle, "kind", None) == "box":  # the box's own triangles: the solver's exact surface
+    elif isinstance(obstacle, (Box, Mesh)):  # their own triangles: the solver's exact surface
         vertices, faces = obstacle.triangles()
-    elif getattr(obstacle, "kind", None) == "mesh":
-        vertices, faces = obstacle.vertices, obstacle.faces
     else:
         raise TypeError(f"contact obstacle {obstacle.name!r}: {type(obstacle).__name__} cannot be drawn")
     return MeshObstacle(obstacle.name, np.asarray(vertices, dtype=float), np.asarray(faces, dtype=np.int64),
