@@ -1,7 +1,7 @@
 """The hoseline command: assembles the commands of hoseline/commands/, one module each.
 
     hoseline solve problem.toml -o out/ [--export iges,step,...]
-    hoseline demo | sweep | compare | calibrate | validation-demo | studio
+    hoseline demo | sweep | compare | calibrate | validation-demo | studio | study | compile
 
 Exit codes: 0 success, 2 bad input (files, paths, options), 3 the solver failed, 4 an export
 could not be made, 5 a check failed.  On an error nothing is written.  The command modules
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import typer
 
-from hoseline.commands import calibrate, compare, demo, solve, studio, study, sweep, validation_demo
+from hoseline.commands import calibrate, compare, compile, demo, solve, studio, study, sweep, validation_demo
 
 app = typer.Typer(
     help="Where a flexible hose lies between two mounts.", no_args_is_help=True, add_completion=False
@@ -25,3 +25,4 @@ app.command("calibrate")(calibrate.calibrate_command)
 app.command("validation-demo")(validation_demo.validation_demo_command)
 app.command("studio")(studio.studio_command)
 app.command("study")(study.study_command)
+app.command("compile")(compile.compile_command)

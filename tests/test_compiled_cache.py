@@ -167,8 +167,9 @@ def test_the_made_up_arrays_of_the_parallel_compile_have_a_placements_types():
 def test_placements_after_compile_kernels_need_no_other_kernel(tmp_path):
     """compile_kernels() compiles or loads every kernel, with every argument type, that a full-size
     placement uses: the demo hose at 100 segments then adds no signature to any kernel, nor does
-    the hose with stiffener springs twisted by 45 degrees after compile_kernels(stiffeners=True).
-    (Counting signatures, not compilations: a kernel loaded from the cache would have compiled on
+    the hose with stiffener springs twisted by 45 degrees after compile_kernels(stiffeners=True),
+    nor, after compile_kernels(clips=True, contact=True), a hose held by clips and the heavy hose
+    that snaps onto the floor at 40 segments.  (Counting signatures, not compilations: a kernel loaded from the cache would have compiled on
     a fresh installation.)"""
     code = SIGNATURES + textwrap.dedent("""
         from dataclasses import replace
@@ -188,18 +189,62 @@ def test_placements_after_compile_kernels_need_no_other_kernel(tmp_path):
         stiffened = demo_problem(45.0, preset.segments)
         solve(replace(stiffened, hose=replace(stiffened.hose, stiffeners=preset.stiffeners)))
         print(sorted(signatures() - before), kernels_compiled(stiffeners=True))
+        compile_kernels(clips=True, contact=True)
+        before = signatures()
+        from hoseline.procedures.compile_kernels import SMALL_PLACEMENT, CONTACT_PLACEMENT, small_clips
+        solve(replace(SMALL_PLACEMENT, clips=small_clips()), estimate_error=False)
+        heavy = replace(CONTACT_PLACEMENT, hose=replace(CONTACT_PLACEMENT.hose, segments=40))
+        solve(heavy, estimate_error=False)
+        print(sorted(signatures() - before), kernels_compiled(clips=True, contact=True))
     """)
     cache = numba.config.CACHE_DIR or compilation.version_folder().parent  # the session's: compiled once
     source = compilation.PACKAGE.parent
-    assert run_python(code, source, cache).splitlines() == ["[]", "[] True"]
+    assert run_python(code, source, cache).splitlines() == ["[]", "[] True", "[] True"]
 
 
 @pytest.mark.parametrize("compiled", [False, True])
 def test_the_command_line_says_when_it_compiles(tmp_path, monkeypatch, compiled):
     calls = []
-    monkeypatch.setattr(compile_kernels, "kernels_compiled", lambda clearance=False, stiffeners=False: compiled)
-    monkeypatch.setattr(compile_kernels, "compile_kernels", lambda *parts: calls.append(parts))
+    monkeypatch.setattr(compile_kernels, "kernels_compiled", lambda **parts: compiled)
+    monkeypatch.setattr(compile_kernels, "compile_kernels", lambda **parts: calls.append(parts))
     result = CliRunner().invoke(cli.app, ["demo", "-o", str(tmp_path / "out"), "--export", "none"])
     assert result.exit_code == 0, result.output
     assert (common.FIRST_RUN in result.output) == (not compiled)
-    assert calls == ([] if compiled else [(False, False)])
+    assert calls == ([] if compiled else [{}])
+
+
+def test_a_problem_with_clips_and_contact_compiles_their_parts_first(tmp_path, monkeypatch):
+    """solve compiles the parts its problem uses (its clips, its contact) before it starts, with the notice."""
+    calls = []
+    monkeypatch.setattr(compile_kernels, "kernels_compiled", lambda **parts: False)
+    monkeypatch.setattr(compile_kernels, "compile_kernels", lambda **parts: calls.append(parts))
+    problem = tmp_path / "problem.toml"
+    problem.write_text(textwrap.dedent("""
+        [hose]
+        length = 400.0
+        outer_diameter = 8.0
+        bending_stiffness = 500.0
+        segments = 16
+        [start]
+        point = [0.0, 0.0, 100.0]
+        direction = [1.0, 0.0, 0.0]
+        [end]
+        point = [150.0, 0.0, 100.0]
+        direction = [-1.0, 0.0, 0.0]
+        [contact]
+        self = true
+    """), encoding="utf-8")
+    result = CliRunner().invoke(cli.app, ["solve", str(problem), "-o", str(tmp_path / "out"), "--export", "none"])
+    assert result.exit_code == 0, result.output
+    assert common.FIRST_RUN in result.output
+    assert calls == [{"stiffeners": False, "clips": False, "contact": True}]
+
+
+def test_hoseline_compile_compiles_every_part(monkeypatch):
+    calls = []
+    monkeypatch.setattr(compile_kernels, "kernels_compiled", lambda **parts: False)
+    monkeypatch.setattr(compile_kernels, "compile_kernels", lambda **parts: calls.append(parts))
+    result = CliRunner().invoke(cli.app, ["compile"])
+    assert result.exit_code == 0, result.output
+    assert calls == [{"clearance": True, "stiffeners": True, "clips": True, "contact": True}]
+    assert "the solver is compiled" in result.output

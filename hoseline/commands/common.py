@@ -47,18 +47,26 @@ FIRST_RUN = "first run: compiling the solver, once per installation"
 NO_CACHE = "compiling the solver (no writable cache folder: every run compiles; set NUMBA_CACHE_DIR to keep it)"
 
 
-def compile_solver(quiet: bool, clearance: bool = False, stiffeners: bool = False) -> None:
-    """Compile the solver's kernels (with `clearance` those of clearance queries, with `stiffeners`
-    those of stiffener springs) if this installation has not yet, saying so meanwhile (a spinner
-    on a terminal, a line in a log) and then how long it took; nothing is said when quiet.
-    See hoseline/procedures/compile_kernels.py."""
+def solver_parts(problem) -> dict[str, bool]:
+    """The parts of the solver (procedures/compile_kernels.py) that placing `problem` uses beyond a plain placement."""
+    return {"stiffeners": problem.hose.stiffeners is not None, "clips": bool(problem.clips),
+            "contact": problem.has_contact}
+
+
+def compile_solver(quiet: bool, problem=None, **parts: bool) -> None:
+    """Compile the solver's kernels for `problem` (its stiffener springs, clips and contact) and the
+    `parts` asked for (clearance=True: clearance queries; see compile_kernels) if this installation has
+    not yet, saying so meanwhile (a spinner on a terminal, a line in a log) and then how long it took;
+    nothing is said when quiet.  See hoseline/procedures/compile_kernels.py."""
     from hoseline.compilation import persistent, version_folder
     from hoseline.procedures.compile_kernels import compile_kernels, kernels_compiled
 
-    if kernels_compiled(clearance, stiffeners):
+    if problem is not None:
+        parts = {**solver_parts(problem), **{name: True for name, asked in parts.items() if asked}}
+    if kernels_compiled(**parts):
         return
     if quiet:
-        compile_kernels(clearance, stiffeners)
+        compile_kernels(**parts)
         return
     console = Console(stderr=True)
     message = FIRST_RUN if persistent() else NO_CACHE
@@ -66,7 +74,7 @@ def compile_solver(quiet: bool, clearance: bool = False, stiffeners: bool = Fals
         console.print(message)
     started = time.perf_counter()
     with console.status(message) if console.is_terminal else nullcontext():
-        compile_kernels(clearance, stiffeners)
+        compile_kernels(**parts)
     kept = f"kept in {version_folder()}" if persistent() else "not kept"
     console.print(f"compiled the solver in {time.perf_counter() - started:.0f} s ({kept})", soft_wrap=True)
 

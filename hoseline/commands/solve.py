@@ -62,7 +62,7 @@ def solve_command(
         raise fail("--hysteresis does not take contact yet (the twist continuation does not keep the hose out of the "
                    "obstacles); remove [contact] or the option", BAD_INPUT)
     with errors_to_exit_codes(out):
-        compile_solver(quiet, stiffeners=problem.hose.stiffeners is not None)
+        compile_solver(quiet, problem)
         with progress_bar(quiet) as progress:
             if wanted is None:
                 result = solve(problem, progress=progress)

@@ -38,7 +38,7 @@ def sweep_command(
         text = sweep_file.read_text(encoding="utf-8")
 
     with errors_to_exit_codes(out):
-        compile_solver(quiet, clearance=True, stiffeners=sweep.problem.hose.stiffeners is not None)
+        compile_solver(quiet, sweep.problem, clearance=True)
         with progress_bar(quiet) as progress:
             result = run_sweep(sweep, progress=progress)
         write_sweep_report(result, out, text)

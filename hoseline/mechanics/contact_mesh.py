@@ -62,6 +62,7 @@ checks with the exact derivatives the barrier needs.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -78,7 +79,7 @@ from hoseline.mechanics.contact import (
     VERTEX_A,
     VERTEX_B,
     VERTEX_C,
-    segment_parameters,
+    segment_closest,
     triangle_parameters,
 )
 from hoseline.model.obstacles import has_area
@@ -349,7 +350,7 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
                 continue
             for position in items_within(p, q, reach, e_lower, e_upper, e_children, e_ranges, root, stack):
                 a, b = edges[position, 0], edges[position, 1]
-                distance = _closest(nodes[i], nodes[i + 1], a, b)[0]
+                distance = segment_closest(nodes[i], nodes[i + 1], a, b)[0]
                 if not every_feature and not _edge_takes(nodes[i], nodes[i + 1], corners[position], joints[position]):
                     continue  # beyond a straight joint, where the edge that continues this one takes the segment
                 gap = distance - hose_radius
@@ -382,7 +383,10 @@ def _edge_takes(p, q, corners, joints):
     for end in range(2):
         if corners[end] != CORNER:
             a, v, b = joints[end, 0], joints[end, 1], joints[end, 2]
-            along = np.sum((_closest(p, q, a, b)[2] - v) * (b - a))
+            t = segment_closest(p, q, a, b)[2]
+            along = 0.0
+            for k in range(3):
+                along += (a[k] + t * (b[k] - a[k]) - v[k]) * (b[k] - a[k])
             if along > 0.0 if corners[end] == JOINT else along <= 0.0:
                 return False
     return True
@@ -411,22 +415,33 @@ def segment_gaps(starts, ends, hose_radius, bound, triangles, normals, lower, up
 
 
 @njit(cache=True)
-def _closest(p, q, a, b):
-    # (distance mm, point on pq, point on ab) of segments pq and ab
-    s, t = segment_parameters(p, q, a, b)
-    x = (1.0 - s) * p + s * q
-    y = (1.0 - t) * a + t * b
-    return np.sqrt(np.sum((x - y) ** 2)), x, y
+def _plane_bound(d, s, t, p, q, a, b, other_p, other_q):
+    # a lower bound (mm) of the distance of segment other_p other_q to the edge ab, whose closest pair to segment pq
+    # is p + s (q - p), a + t (b - a) at distance d: the plane through the edge's point normal to the pair separates
+    # the edge from everything on the segment's side
+    if d <= 0.0:
+        return 0.0
+    bound = math.inf
+    for end in (other_p, other_q):
+        along = 0.0
+        for k in range(3):
+            y = a[k] + t * (b[k] - a[k])
+            along += (p[k] + s * (q[k] - p[k]) - y) * (end[k] - y)
+        bound = min(bound, along / d)
+    return bound
 
 
 @njit(cache=True)
-def _plane_bound(d, x, y, p, q):
-    # a lower bound (mm) of the distance of segment pq to the segment whose closest pair to another is (x, y) at
-    # distance d: the plane through y normal to x - y separates that segment from everything on x's side
-    if d <= 0.0:
-        return 0.0
-    n = (x - y) / d
-    return min(np.sum(n * (p - y)), np.sum(n * (q - y)))
+def _squared_distance(x, y):
+    # |x - y|^2 of two points (3,), mm^2
+    return (x[0] - y[0]) ** 2 + (x[1] - y[1]) ** 2 + (x[2] - y[2]) ** 2
+
+
+@njit(cache=True)
+def _interpolate(start, end, tau, out):
+    # out = start + tau (end - start), in place (3,)
+    for k in range(3):
+        out[k] = start[k] + tau * (end[k] - start[k])
 
 
 @njit(cache=True)
@@ -442,24 +457,28 @@ def swept_edges_clear(start, end, first, second, edges, clearances, evaluations)
     Undecided after `evaluations` distances per pair: not clear (the step is then cut).
     """
     intervals = np.empty((evaluations + 2, 2))
+    pa, qa, pb, qb = np.empty(3), np.empty(3), np.empty(3), np.empty(3)  # the segment at tau_a and tau_b
     for pair in range(first.shape[0]):
         i, a, b, clearance = first[pair], edges[second[pair], 0], edges[second[pair], 1], clearances[pair]
         p0, q0, p1, q1 = start[i], start[i + 1], end[i], end[i + 1]
-        move = max(np.sqrt(np.sum((p1 - p0) ** 2)), np.sqrt(np.sum((q1 - q0) ** 2)))
-        if _closest(p0, q0, a, b)[0] - move > clearance:  # cannot come nearer than its move: no search
+        move = math.sqrt(max(_squared_distance(p0, p1), _squared_distance(q0, q1)))  # the larger end's move
+        if segment_closest(p0, q0, a, b)[0] - move > clearance:  # cannot come nearer than its move: no search
             continue
         intervals[0] = (0.0, 1.0)
         count, used = 1, 0
         while count > 0:
             count -= 1
             ta, tb = intervals[count]
-            pa, qa, pb, qb = p0 + ta * (p1 - p0), q0 + ta * (q1 - q0), p0 + tb * (p1 - p0), q0 + tb * (q1 - q0)
-            da, xa, ya = _closest(pa, qa, a, b)
-            db, xb, yb = _closest(pb, qb, a, b)
+            _interpolate(p0, p1, ta, pa)
+            _interpolate(q0, q1, ta, qa)
+            _interpolate(p0, p1, tb, pb)
+            _interpolate(q0, q1, tb, qb)
+            da, sa, ua = segment_closest(pa, qa, a, b)
+            db, sb, ub = segment_closest(pb, qb, a, b)
             used += 2
             if min(da, db) <= clearance:
                 return False
-            if max(_plane_bound(da, xa, ya, pb, qb), _plane_bound(db, xb, yb, pa, qa)) > clearance:
+            if max(_plane_bound(da, sa, ua, pa, qa, a, b, pb, qb), _plane_bound(db, sb, ub, pb, qb, a, b, pa, qa)) > clearance:
                 continue
             if used >= evaluations:
                 return False

@@ -274,9 +274,17 @@ class StepFilter:
         if self.gaps.size == 0:
             return True
         kinds, first, second = self.pairs
+        # two segments' surfaces are at least their midpoints' distance less a segment length and a diameter
+        # apart: a self pair that this bound clears needs no exact distance (most of them, on a long hose)
+        uncertain = kinds != SEGMENT_SEGMENT
+        pairs = ~uncertain
+        if np.any(pairs):
+            midpoints = 0.5 * (nodes[:-1] + nodes[1:])
+            apart = np.linalg.norm(midpoints[first[pairs]] - midpoints[second[pairs]], axis=1)
+            uncertain[pairs] = apart - props.segment_length - 2.0 * model.hose_radius <= SAFE_FRACTION * self.gaps[pairs]
         gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, model.mesh.triangles,
-                           model.mesh.edges, kinds, first, second)
-        return bool(np.all(gaps > SAFE_FRACTION * self.gaps))
+                           model.mesh.edges, kinds[uncertain], first[uncertain], second[uncertain])
+        return bool(np.all(gaps > SAFE_FRACTION * self.gaps[uncertain]))
 
     def _paths_clear(self, nodes: np.ndarray, model: ContactModel, alpha: float) -> bool:
         """Whether every station and every segment near a mesh edge stays clear of the meshes along its path, by
@@ -319,7 +327,9 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
         return StepFilter((kinds, first, second), gaps, 1.0, swept)
     last = props.segments
     bound = np.where(np.isin(kinds, STATION_KINDS), reach[first], reach[np.minimum(first + 1, last)])
-    bound = bound + np.where(kinds == SEGMENT_SEGMENT, reach[np.minimum(second + 1, last)], 0.0)
+    # segments i < j move relative to each other only by the turns of the segments from i to j
+    relative = reach[np.minimum(second + 1, last)] - reach[first]
+    bound = np.where(kinds == SEGMENT_SEGMENT, relative, bound)
     thickness = np.full(kinds.size, np.inf)
     thickness[kinds == SEGMENT_SEGMENT] = 2.0 * model.hose_radius
     balls, capsules = kinds == SEGMENT_BALL, kinds == SEGMENT_CAPSULE
@@ -342,21 +352,24 @@ def solve_with_contact(
     *,
     tolerance: float = 1e-10,
     max_iterations: int = 60,
+    max_halvings: int = 30,
 ) -> tuple[RodState, NewtonReport]:
     """Newton iterations from `state` (which must not penetrate) to an equilibrium with contact.
 
     Returns the final state and a report as newton.solve_equilibrium does; the state is only
     meaningful when report.converged.  tolerance: relative residual of force and moment balance.
+    max_halvings: of a step before the iteration gives up ("no acceptable step found"); a
+    continuation gives up sooner and halves its own step instead.
     Unstable directions counted by the KKT pivots at the converged state are confirmed by the dense
     reduced Hessian (_lowest_mode): an eigenvalue above -NEUTRAL times the largest is zero (neutral).
     One BLAS thread: the dense systems are small, and threads only contend for the cores (10x
     slower on a loaded two-core machine).
     """
     with one_blas_thread():
-        return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations)
+        return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings)
 
 
-def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
+def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings):
     """solve_with_contact without the thread limit."""
     inside = model.penetration(centerline(state.frames, clamps.start_point, props.segment_length))
     if inside is not None:
@@ -376,7 +389,7 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations):
         watch = step_filter(props, clamps, state, step, model)
         alpha = watch.limit
         accepted = None
-        for _ in range(30):
+        for _ in range(max_halvings):
             trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
             if not watch.admits(props, clamps, trial, model, alpha):
                 alpha *= 0.5

@@ -45,6 +45,7 @@ from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_PLANE, STATION_T
 
 DROPPED = 1e-13  # eigenvalues of a group's station Hessian below this fraction of its largest are rounding
 BACKWARD_ERROR = 1e-9  # a banded solve with a larger relative residual is redone dense
+ACCURATE = 1e-13  # a banded solve with a smaller relative residual needs no step of iterative refinement
 
 kkt_solves = Counter()  # "banded" and "dense" (fall-backs) solves of this process, for the benchmarks
 
@@ -311,7 +312,8 @@ def banded_step(band, jac_t, columns, signs, grad, constraint):
     band: B in lower band storage; jac_t (n, m) = Jc^T; columns (n, r) = U; signs (r,) = sigma.  None when the
     banded factor is not to be trusted: a tiny pivot of B, a singular Schur complement, a backward error above
     BACKWARD_ERROR after one step of iterative refinement (eliminating a border much stiffer than B, the
-    barrier's curvature, loses digits to cancellation, which refinement with the same factors recovers).
+    barrier's curvature, loses digits to cancellation, which refinement with the same factors recovers;
+    a first solve already within ACCURATE, a few hundred eps, is kept as it is).
     The Schur complement (m + r square) is factored by LAPACK's sytrf, which gives its inertia.
     """
     lower, diag, tiny = ldlt_banded(band, 0.0)
@@ -329,11 +331,12 @@ def banded_step(band, jac_t, columns, signs, grad, constraint):
 
     m = jac_t.shape[1]
     step, nu = solve(-grad, -constraint)
-    first_rows, last_rows, _ = kkt_residual(band, columns, signs, jac_t, grad, constraint, step, -nu[:m])
-    correction, nu_correction = solve(first_rows, last_rows)
-    step, nu = step + correction, nu + nu_correction
+    first_rows, last_rows, error = kkt_residual(band, columns, signs, jac_t, grad, constraint, step, -nu[:m])
+    if error > ACCURATE:
+        correction, nu_correction = solve(first_rows, last_rows)
+        step, nu = step + correction, nu + nu_correction
+        error = kkt_residual(band, columns, signs, jac_t, grad, constraint, step, -nu[:m])[2]
     mu = -nu[:m]
-    error = kkt_residual(band, columns, signs, jac_t, grad, constraint, step, mu)[2]
     if not (error <= BACKWARD_ERROR and np.all(np.isfinite(step)) and np.all(np.isfinite(mu))):
         return None
     unstable = count_negative(diag) + negative_pivots(factor, pivots) - int(np.sum(signs > 0.0)) - m

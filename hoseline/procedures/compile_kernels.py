@@ -5,7 +5,11 @@ carried to its mount, twisted; stability read at the end), which compiles, or lo
 cache of hoseline/compilation.py, every kernel of a placement with the argument types every
 placement uses; with clearance=True it also asks a clearance query (sweeps), with
 stiffeners=True it places the hose with the thesis' stiffener springs (their kernels take other
-argument types).  Kernels no part asked for compile when first used (clips, for one).
+argument types), with clips=True a hose held by a fixed and a sliding clip, with contact=True a
+heavy hose that snaps down onto a floor (the contact Newton, its downhill mode and step filter,
+with every kind of obstacle and self-contact).  `hoseline compile` compiles every part; the
+Makefile runs it when it installs hoseline, as an ahead-of-time build would, so that the first
+run after `make` compiles nothing.
 
 On a machine with two cores or more, a first run compiles in two processes: this one compiles
 the Newton iteration (newton_kernels: 15 s of CPU of the 25 s), while a second compiles the
@@ -38,6 +42,8 @@ from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.mechanics.rotations import rotate_frames
 from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model import Hose, Mount, Problem
+from hoseline.model.clips import Clip
+from hoseline.model.obstacles import Box, Cylinder, Plane, Sphere
 from hoseline.model.stiffeners import thesis_preset
 from hoseline.procedures.geometry.clearance import TriangleIndex
 from hoseline.procedures.placement.sequence import solve
@@ -52,9 +58,29 @@ SMALL_PLACEMENT = Problem(
 )
 
 
-def compile_kernels(clearance: bool = False, stiffeners: bool = False) -> None:
+# A heavy hose, too long to hang clear of the floor below its mounts: the place phase loses stability and the
+# hose snaps down onto the floor (the contact Newton, its downhill mode); the other obstacles lie out of reach,
+# which still compiles their kernels (the argument types are those of any contact model).
+CONTACT_PLACEMENT = Problem(
+    Hose(length=400.0, outer_diameter=8.0, bending_stiffness=500.0, torsional_stiffness=385.0, mass_per_length=0.5,
+         segments=16),
+    Mount([0.0, 0.0, 100.0], [1.0, 0.0, 0.0]),
+    Mount([150.0, 0.0, 100.0], [-1.0, 0.0, 0.0]),
+    0.0,
+    gravity=np.array([0.0, 0.0, -9.81]),
+    contact=(Plane(np.zeros(3), np.array([0.0, 0.0, 1.0]), "floor"),
+             Sphere(np.array([0.0, 500.0, 0.0]), 10.0, "sphere"),
+             Cylinder(np.array([0.0, -500.0, 0.0]), np.array([100.0, -500.0, 0.0]), 10.0, "cylinder"),
+             Box(np.array([500.0, 0.0, 50.0]), np.array([20.0, 20.0, 20.0]), name="box")),
+    self_contact=True,
+)
+
+
+def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bool = False,
+                    contact: bool = False) -> None:
     """Compile, or load from the cache, every kernel of a placement; with `clearance` those of a
-    clearance query, with `stiffeners` those of a placement with stiffener springs."""
+    clearance query, with `stiffeners` those of a placement with stiffener springs, with `clips`
+    those of a placement with clips, with `contact` those of a placement with contact."""
     with compiling("placement"):
         if not is_compiled("placement"):
             with _second_process("stability_kernels"):
@@ -69,12 +95,31 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False) -> None:
             preset = thesis_preset(SMALL_PLACEMENT.hose.length)
             hose = replace(SMALL_PLACEMENT.hose, segments=preset.segments, stiffeners=preset.stiffeners)
             solve(replace(SMALL_PLACEMENT, hose=hose, end_twist_deg=0.0))
+    if clips:
+        with compiling("clips"):
+            solve(replace(SMALL_PLACEMENT, clips=small_clips()), estimate_error=False)
+    if contact:
+        with compiling("contact"):
+            solve(CONTACT_PLACEMENT, estimate_error=False)
 
 
-def kernels_compiled(clearance: bool = False, stiffeners: bool = False) -> bool:
-    """Whether compile_kernels(clearance, stiffeners) has already filled the cache for this version and CPU."""
-    wanted = ("placement", "clearance" if clearance else None, "stiffeners" if stiffeners else None)
-    return all(is_compiled(part) for part in wanted if part)
+def small_clips() -> tuple[Clip, Clip]:
+    """A fixed clip a third along SMALL_PLACEMENT's shape and a sliding one two thirds along (where they sit)."""
+    placed = solve(SMALL_PLACEMENT, estimate_error=False)
+    h = SMALL_PLACEMENT.hose.segment_length
+    held = []
+    for kind, station in (("fixed", 5), ("sliding", 11)):
+        tangent = placed.frames[station - 1, 2] + placed.frames[station, 2]
+        held.append(Clip(kind, placed.centerline[station], station * h, tangent))
+    return tuple(held)
+
+
+def kernels_compiled(clearance: bool = False, stiffeners: bool = False, clips: bool = False,
+                     contact: bool = False) -> bool:
+    """Whether compile_kernels(clearance, stiffeners, clips, contact) has already filled the cache for this
+    version and CPU."""
+    wanted = {"placement": True, "clearance": clearance, "stiffeners": stiffeners, "clips": clips, "contact": contact}
+    return all(is_compiled(part) for part, asked in wanted.items() if asked)
 
 
 def newton_kernels() -> None:

@@ -23,7 +23,12 @@ from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, StepControl
 
 CONTACT_TOLERANCE = 1e-9  # loosest final residual: the barrier's stiffness (pressure / gap) lifts the rounding floor
-DOWNHILL_ITERATIONS = 300  # of minimise_with_contact after a fold: a snap may travel far (a loop forming)
+DOWNHILL_ITERATIONS = 1000  # of minimise_with_contact after a fold: a snap may travel far (a loop forming: 430)
+STEP_ITERATIONS = 25  # of solve_with_contact per step: a step not converged by then is halved (as newton.solve_equilibrium)
+LAST_STEP_ITERATIONS = 60  # for the smallest step, before the branch is judged to end in a fold
+POLISHED_TOLERANCE = 1e-12  # what the end of a path is polished to, if two iterations reach it
+POLISH_ITERATIONS = 2
+STEP_HALVINGS = 10  # of a Newton step within a continuation step: a step that needs more is halved instead
 
 
 def follow_contact(
@@ -49,14 +54,17 @@ def follow_contact(
     while t < 1.0 - 1e-14:
         t_next = min(1.0, t + dt)
         tolerance = max(control.tolerance, CONTACT_TOLERANCE) if t_next == 1.0 else control.path_tolerance
-        trial, report = solve_with_contact(props, path(t_next), state, model, tolerance=tolerance)
+        last_try = 0.5 * dt < control.smallest
+        trial, report = solve_with_contact(props, path(t_next), state, model, tolerance=tolerance,
+                                           max_iterations=LAST_STEP_ITERATIONS if last_try else STEP_ITERATIONS,
+                                           max_halvings=30 if last_try else STEP_HALVINGS)
         iterations += report.iterations
         if log is not None:
             log.iterations += report.iterations
         if report.converged and report.unstable_directions != 0:  # lost stability between t and t_next
             start_from, what = trial, (f"stability lost between fractions {t:.4f} and {t_next:.4f} "
                                        f"({report.unstable_directions} unstable direction(s))")
-        elif not report.converged and 0.5 * dt >= control.smallest:
+        elif not report.converged and not last_try:
             dt *= 0.5
             continue
         elif not report.converged:  # the branch ends in a fold: the hose snaps
@@ -75,6 +83,15 @@ def follow_contact(
             progress(phase, t)
         if start_from is None and report.iterations <= control.fast_iterations:
             dt = min(control.largest, 2.0 * dt)
+    # the end of the path, polished: Newton converges quadratically, so one or two more iterations take the
+    # residual from CONTACT_TOLERANCE to rounding (the load balance then holds to its last digits); kept if stable
+    polished, report = solve_with_contact(props, path(1.0), state, model, tolerance=POLISHED_TOLERANCE,
+                                          max_iterations=POLISH_ITERATIONS)
+    iterations += report.iterations
+    if log is not None:
+        log.iterations += report.iterations
+    if report.converged and report.unstable_directions == 0:
+        state = polished
     return state, iterations
 
 
