@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from hoseline.io.sweep_file import SweepFileError, sweep_from_dict
+from hoseline.io.sweep_file import sweep_from_dict
 from hoseline.io.sweep_results import write_sweep_data
 from hoseline.procedures.sweep.quasi_static import run_sweep
 
@@ -79,12 +79,6 @@ def test_contact_columns_in_poses_csv_and_sweep_json(on_and_through_the_floor, t
     worst = {row["quantity"]: row for row in document["worst_cases"]}
     assert worst["contact force from floor"]["pose"] == result.pose_count - 1  # the end lowest
     assert worst["smallest contact gap to floor"]["value"] >= 0.0
-
-
-def test_a_contact_obstacle_on_a_moving_body_is_refused():
-    contact = {"obstacles": [dict(FLOOR["obstacles"][0], body="arm")]}
-    with pytest.raises(SweepFileError, match=r"contact.obstacles\[0\].body = 'arm': .* not implemented"):
-        sweep_from_dict(lowered_end(contact))
 
 
 def test_the_report_draws_the_floor_and_colours_the_contact_points_by_their_push(on_and_through_the_floor):

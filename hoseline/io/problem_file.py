@@ -122,7 +122,8 @@ entering (frictionless), and the hose kept out of itself::
     file = "bracket.stl"             # STL, OBJ, PLY or STEP, mm, relative to the problem file
 
 These are not the [[obstacles]] of a sweep file (meshes the sweep measures clearance to, without
-contact); a sweep file may hold [contact] too (static obstacles, kept out of at every pose).
+contact); a sweep file may hold [contact] too, kept out of at every pose, each obstacle fixed or moving
+with a body (body = ..., io/sweep_file.py).
 """
 
 from __future__ import annotations

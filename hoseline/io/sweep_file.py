@@ -26,8 +26,10 @@ The hose, the mounts at design position and the environment are those of a probl
     [sweep]
     compare_free_roll = true    # optional: also sweep with the end fitting free to spin
 
-    [contact]                   # optional, as in a problem file: static planes, spheres, cylinders, boxes, meshes
-                                # and self-contact, kept out of at every pose (no body: they do not move)
+    [contact]                   # optional, as in a problem file: planes, spheres, cylinders, boxes, meshes
+                                # and self-contact, kept out of at every pose
+    [[contact.obstacles]]       # as in a problem file, plus:
+    body = "knuckle"            # optional: the obstacle moves with this body (default: fixed)
 
     [[clips]]                   # as in a problem file, plus:
     body = "knuckle"            # optional: the clip moves with this body (default: fixed)
@@ -188,16 +190,13 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
             else:  # only the body: the mount itself comes from elsewhere (e.g. [mounts] iges)
                 del problem_part[role]
             sweep_part[role] = {"body": table["body"]}
-    clip_bodies: tuple = ()
-    if isinstance(problem_part.get("clips"), list):  # [[clips]] body = ...: the sweep's part of a clip
-        tables = problem_part["clips"]
-        clip_bodies = tuple(table.get("body") if isinstance(table, dict) else None for table in tables)
-        problem_part["clips"] = [{key: value for key, value in table.items() if key != "body"}
-                                 if isinstance(table, dict) else table for table in tables]
-        for index, body in enumerate(clip_bodies):
-            if body is not None and not isinstance(body, str):
-                raise SweepFileError(f"{source}: clips[{index}].body = {body!r}: must be the name of a [[bodies]] table")
-    _refuse_moving_contact(problem_part.get("contact"), source)
+    clip_bodies = contact_bodies = ()
+    if isinstance(problem_part.get("clips"), list):  # [[clips]] body = ...
+        clip_bodies, problem_part["clips"] = _take_bodies(problem_part["clips"], "clips", source)
+    contact = problem_part.get("contact")
+    if isinstance(contact, dict) and isinstance(contact.get("obstacles"), list):  # [[contact.obstacles]] body = ...
+        contact_bodies, obstacles = _take_bodies(contact["obstacles"], "contact.obstacles", source)
+        problem_part["contact"] = dict(contact, obstacles=obstacles)
     if "bodies" not in sweep_part:
         raise SweepFileError(
             f"{source}: missing [[bodies]]: a sweep needs at least one moving body, with poses = \"table.csv\" "
@@ -221,21 +220,21 @@ def sweep_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path | N
             obstacles=obstacles,
             compare_free_roll=tables.sweep.compare_free_roll,
             clip_bodies=clip_bodies if any(body is not None for body in clip_bodies) else (),
+            contact_bodies=contact_bodies if any(body is not None for body in contact_bodies) else (),
         )
     except ValueError as exc:
         raise SweepFileError(f"{source}: {exc}") from None
 
 
-def _refuse_moving_contact(contact, source: str) -> None:
-    """Refuse a [[contact.obstacles]] table with body = ...: contact obstacles stay where they are."""
-    if not isinstance(contact, dict) or not isinstance(contact.get("obstacles"), list):
-        return
-    for index, table in enumerate(contact["obstacles"]):
-        if isinstance(table, dict) and "body" in table:
-            raise SweepFileError(
-                f"{source}: contact.obstacles[{index}].body = {table['body']!r}: contact with an obstacle that moves "
-                "with a body is not implemented; remove body (the obstacle stays at its place), or give the moving "
-                "part as an [[obstacles]] mesh with body = ... (clearance measured, no contact)")
+def _take_bodies(tables: list, label: str, source: str) -> tuple[tuple[str | None, ...], list]:
+    """(the body of each table (None: fixed), the tables without it): the sweep's part of a [[clips]] or
+    [[contact.obstacles]] table (label: its name), which the problem file does not take."""
+    bodies = tuple(table.get("body") if isinstance(table, dict) else None for table in tables)
+    for index, body in enumerate(bodies):
+        if body is not None and not isinstance(body, str):
+            raise SweepFileError(f"{source}: {label}[{index}].body = {body!r}: must be the name of a [[bodies]] table")
+    return bodies, [{key: value for key, value in table.items() if key != "body"} if isinstance(table, dict) else table
+                    for table in tables]
 
 
 def _motion(body: BodySection, base: Path, source: str) -> BodyMotion:

@@ -104,7 +104,9 @@ def sweep_document(result: SweepResult, envelope: Envelope | None = None) -> dic
         "assembly": result.assembly.summary(),
     }
     if result.contacts:
-        document["contact"] = [{"name": c.name, "kind": c.kind, "min_gap_mm": without_round_off(c.min_gap),
+        bodies = {o.name: result.sweep.contact_body(j) for j, o in enumerate(result.sweep.problem.contact)}
+        document["contact"] = [{"name": c.name, "kind": c.kind, "body": bodies.get(c.name),
+                                "min_gap_mm": without_round_off(c.min_gap),
                                 "total_force_N": without_round_off(c.total_force),
                                 "length_in_contact_mm": without_round_off(c.length_in_contact)}
                                for c in result.contacts]

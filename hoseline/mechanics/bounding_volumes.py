@@ -62,6 +62,32 @@ def build_tree(item_lower, item_upper, centroids, leaf_size):
     return order, lower[:used].copy(), upper[:used].copy(), children[:used].copy(), ranges[:used].copy()
 
 
+@njit(cache=True)
+def refit_boxes(items, lower, upper, children, ranges, first, end):
+    """Refit, in place, the boxes of the nodes [first, end) of a tree built by build_tree to its items moved.
+
+    items: (F, k, 3) mm, each item (a triangle, an edge) as its k corner points, in tree order.
+    lower, upper, children, ranges: the tree (build_tree; a node's children come after it, so the
+    nodes are refitted last to first).  The topology is kept: after a rigid motion of the items the
+    boxes are exact again (the items' bounds), the split only less balanced than a rebuild's.
+    """
+    for node in range(end - 1, first - 1, -1):
+        if children[node, 0] >= 0:
+            left, right = children[node, 0], children[node, 1]
+            for k in range(3):
+                lower[node, k] = min(lower[left, k], lower[right, k])
+                upper[node, k] = max(upper[left, k], upper[right, k])
+            continue
+        for k in range(3):
+            lower[node, k] = np.inf
+            upper[node, k] = -np.inf
+        for position in range(ranges[node, 0], ranges[node, 0] + ranges[node, 1]):
+            for corner in range(items.shape[1]):
+                for k in range(3):
+                    lower[node, k] = min(lower[node, k], items[position, corner, k])
+                    upper[node, k] = max(upper[node, k], items[position, corner, k])
+
+
 @njit(cache=True, inline="always")
 def point_of(points, i):
     """Row i of an (n, 3) array as a tuple."""

@@ -108,7 +108,8 @@ class MeshArrays:
     s of that test on the triangle's side (0: not a flat edge) and, for a station on the edge (test zero),
     +1 if the triangle takes it, else -1 (the sign of s ((q - p) x w) . m, TIE_DIRECTIONS).
     triangle_tree: (lower (M, 3), upper (M, 3), children (M, 2), ranges (M, 2)) of every mesh's tree,
-    node and item indices global.  triangle_roots (K,): the root node of each mesh's tree.
+    node and item indices global.  triangle_roots (K,): the root node of each mesh's tree (-1: the mesh left out
+of the searches, contact_motion.only).
     triangle_mesh (F,): the mesh of each triangle.  edges (E, 2, 3), edge_tree, edge_roots, edge_mesh:
     the same for the kept edges (-1 as root: a mesh without kept edges).  corners (E, 2): CORNER, JOINT or
     COVERED for each end of an edge (_edge_corners): a segment pairs with an edge at a corner, but where the
@@ -395,7 +396,7 @@ def _edge_takes(p, q, corners, joints):
 @njit(cache=True)
 def segment_gaps(starts, ends, hose_radius, bound, triangles, normals, lower, upper, children, ranges, roots):
     """The exact gap (mm) of each segment starts[i] to ends[i] to each mesh and the nearest triangle, (K, n) each;
-    `bound` and -1 beyond it.
+    `bound` and -1 beyond it (and for a mesh whose root is -1: left out).
 
     The segment-triangle distance (mechanics/proximity.py, zero where the segment crosses a triangle)
     less the hose radius, by branch and bound over each mesh's tree.
@@ -405,6 +406,8 @@ def segment_gaps(starts, ends, hose_radius, bound, triangles, normals, lower, up
     nearest = -np.ones((roots.shape[0], n_seg), np.int64)
     stack = np.empty(STACK_SIZE, np.int64)
     for m in range(roots.shape[0]):
+        if roots[m] < 0:  # a mesh left out (contact_motion.only)
+            continue
         for i in range(n_seg):
             d, position, _, _ = segment_search(point_of(starts, i), point_of(ends, i), bound + hose_radius,
                                                triangles, normals, lower, upper, children, ranges, roots[m], stack)

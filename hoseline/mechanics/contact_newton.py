@@ -268,7 +268,11 @@ class StepFilter:
 
     def admits(self, props: RodProperties, clamps: Clamps, trial: RodState, model: ContactModel, alpha: float) -> bool:
         """Whether the trial state, `alpha` times the step, keeps every watched gap above SAFE_FRACTION of its value."""
-        nodes = centerline(trial.frames, clamps.start_point, props.segment_length)
+        return self.admits_centerline(centerline(trial.frames, clamps.start_point, props.segment_length), model, alpha)
+
+    def admits_centerline(self, nodes: np.ndarray, model: ContactModel, alpha: float) -> bool:
+        """Whether the hose with centreline `nodes` (N+1, 3) mm, `alpha` times the move, keeps every watched gap above
+        SAFE_FRACTION of its value."""
         if self.swept is not None and not self._paths_clear(nodes, model, alpha):
             return False
         if self.gaps.size == 0:
@@ -281,7 +285,8 @@ class StepFilter:
         if np.any(pairs):
             midpoints = 0.5 * (nodes[:-1] + nodes[1:])
             apart = np.linalg.norm(midpoints[first[pairs]] - midpoints[second[pairs]], axis=1)
-            uncertain[pairs] = apart - props.segment_length - 2.0 * model.hose_radius <= SAFE_FRACTION * self.gaps[pairs]
+            segment = float(np.linalg.norm(nodes[1] - nodes[0]))  # every segment's length
+            uncertain[pairs] = apart - segment - 2.0 * model.hose_radius <= SAFE_FRACTION * self.gaps[pairs]
         gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, model.mesh.triangles,
                            model.mesh.edges, kinds[uncertain], first[uncertain], second[uncertain])
         return bool(np.all(gaps > SAFE_FRACTION * self.gaps[uncertain]))
@@ -306,11 +311,19 @@ class StepFilter:
 
 def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, model: ContactModel) -> StepFilter:
     """The StepFilter of `step` from `state` (see StepFilter)."""
-    h = props.segment_length
     index = rotation_index(props, clamps, state)
     turns = np.linalg.norm(step[index[:, None] + np.arange(3)[None, :]], axis=1)
-    reach = np.concatenate([[0.0], h * np.cumsum(turns)])  # bound of station k's move
-    nodes = centerline(state.frames, clamps.start_point, h)
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    return motion_filter(nodes, turns, 0.0, props.segment_length, model)
+
+
+def motion_filter(nodes: np.ndarray, turns: np.ndarray, start_move: float, h: float, model: ContactModel) -> StepFilter:
+    """The StepFilter of a move of the hose from centreline `nodes` (N+1, 3) mm (see StepFilter).
+
+    turns: (N,) rad, a bound of how far each segment's tangent turns along the move (a Newton step: its
+    rotation); start_move: mm, how far the start point moves (on a line).  h: segment length, mm.
+    """
+    reach = start_move + np.concatenate([[0.0], h * np.cumsum(turns)])  # bound of station k's move
     cutoff = float(reach[-1]) + model.activation
     kinds, first, second, gaps = model.pairs(nodes, cutoff, meshes=False)
     swept = None
@@ -325,7 +338,7 @@ def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.
         swept = (nodes, station_gaps, bend, (segments[on_edges], edges[on_edges], edge_gaps[on_edges]))
     if kinds.size == 0:
         return StepFilter((kinds, first, second), gaps, 1.0, swept)
-    last = props.segments
+    last = nodes.shape[0] - 1
     bound = np.where(np.isin(kinds, STATION_KINDS), reach[first], reach[np.minimum(first + 1, last)])
     # segments i < j move relative to each other only by the turns of the segments from i to j
     relative = reach[np.minimum(second + 1, last)] - reach[first]

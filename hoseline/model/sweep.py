@@ -47,6 +47,7 @@ class SweepProblem:
     compare_free_roll: also sweep with the end fitting free to spin about its axis (the
         common modelling error) and report how far that answer is from the right one.
     clip_bodies: the body each of problem.clips moves with (None: fixed), empty for all fixed.
+    contact_bodies: the body each of problem.contact moves with (None: fixed), empty for all fixed.
     """
 
     problem: Problem
@@ -56,6 +57,7 @@ class SweepProblem:
     obstacles: tuple[Obstacle, ...] = ()
     compare_free_roll: bool = True
     clip_bodies: tuple[str | None, ...] = ()
+    contact_bodies: tuple[str | None, ...] = ()
 
     def __post_init__(self) -> None:
         if not self.motions:
@@ -72,6 +74,12 @@ class SweepProblem:
         for index, body in enumerate(self.clip_bodies):
             if body is not None and body not in names:
                 raise ValueError(f"clips[{index}].body = {body!r}: no such body; bodies: {', '.join(names)}")
+        if self.contact_bodies and len(self.contact_bodies) != len(self.problem.contact):
+            raise ValueError(f"{len(self.contact_bodies)} contact bodies for {len(self.problem.contact)} contact "
+                             "obstacles: give one per obstacle")
+        for index, body in enumerate(self.contact_bodies):
+            if body is not None and body not in names:
+                raise ValueError(f"contact.obstacles[{index}].body = {body!r}: no such body; bodies: {', '.join(names)}")
         for obstacle in self.obstacles:
             if obstacle.body is not None and obstacle.body not in names:
                 raise ValueError(f"obstacle '{obstacle.name}': body = {obstacle.body!r}: no such body")
@@ -138,6 +146,10 @@ class SweepProblem:
     def clip_body(self, index: int) -> str | None:
         """The body clip `index` moves with (None: fixed)."""
         return self.clip_bodies[index] if self.clip_bodies else None
+
+    def contact_body(self, index: int) -> str | None:
+        """The body contact obstacle `index` (of problem.contact) moves with (None: fixed)."""
+        return self.contact_bodies[index] if self.contact_bodies else None
 
     def pose(self, body: str | None, index: int) -> Pose:
         """Pose of `body` at sweep pose `index` (the design position for None)."""

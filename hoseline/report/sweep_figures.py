@@ -7,6 +7,8 @@ carries only what changes from pose to pose.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import plotly.graph_objects as go
 from plotly.subplots import make_subplots
@@ -49,7 +51,7 @@ def view_figure(result: SweepResult) -> go.Figure:
     points, with a slider through the poses."""
     sweep = result.sweep
     figure = go.Figure()
-    moving = []  # (trace index, obstacle) of obstacles that move with a body
+    moving = []  # (trace index, obstacle) of obstacles that move with a body ([contact] ones too)
     for obstacle in sweep.obstacles:
         x, y, z = _single(obstacle.vertices).T
         i, j, k = obstacle.faces.T
@@ -58,11 +60,14 @@ def view_figure(result: SweepResult) -> go.Figure:
         if obstacle.body is not None:
             moving.append((len(figure.data) - 1, obstacle))
     span = np.ptp(result.centerlines.reshape(-1, 3), axis=0).max()
-    for mesh in contact_meshes(sweep.problem, PLANE_MARGIN * span / sweep.problem.hose.length):
+    meshes = contact_meshes(sweep.problem, PLANE_MARGIN * span / sweep.problem.hose.length)
+    for index, mesh in enumerate(meshes):
         x, y, z = _single(mesh.vertices).T
         i, j, k = mesh.faces.T
         figure.add_trace(go.Mesh3d(x=x, y=y, z=z, i=i, j=j, k=k, color=CONTACT_OBSTACLE_COLOUR, opacity=0.35,
                                    name=f"{mesh.name} (contact)", showlegend=True, hoverinfo="name", flatshading=True))
+        if sweep.contact_body(index) is not None:
+            moving.append((len(figure.data) - 1, replace(mesh, body=sweep.contact_body(index))))
     for clearance in result.clearances:  # the worst approach of all poses, marked once
         k = clearance.worst
         pair = np.vstack([clearance.on_hose[k], clearance.on_obstacle[k]])

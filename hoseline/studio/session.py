@@ -298,6 +298,9 @@ class Session:
             raise StudioError("no sweep is open: the timeline needs a sweep file")
         if not 0 <= index < self.sweep.pose_count:
             raise StudioError(f"pose {index} is outside the sweep's 0..{self.sweep.pose_count - 1}")
+        if any(body is not None for body in self.sweep.contact_bodies):
+            raise StudioError("the sweep's [contact] obstacles move with bodies, which the timeline does not do yet: "
+                              "run the sweep and open its report")
         sweep, design = self.sweep, self.design
         start = sweep.pose(sweep.start_body, index)
         end = sweep.pose(sweep.end_body, index)

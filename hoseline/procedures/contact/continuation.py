@@ -9,6 +9,9 @@ snaps), the hose is relaxed downhill to a stable equilibrium at that fraction by
 Newton's downhill mode (minimise_with_contact), the snap is recorded as an event of the log
 with where it happened and how far the hose moved, and the path is followed on from there;
 only if no stable equilibrium is found does the path fail with PlacementError naming where.
+With obstacles that move along the path (a sweep's, ObstaclePath) the previous equilibrium may be
+inside them at the next fraction, or one may have passed through the hose on the way: each step
+starts from a state the move check admits (procedures/contact/moving.py), else it is halved.
 """
 
 from __future__ import annotations
@@ -20,7 +23,8 @@ import numpy as np
 from hoseline.mechanics.contact_newton import NEUTRAL_MODE, ContactModel, minimise_with_contact, solve_with_contact
 from hoseline.mechanics.newton import NewtonReport, RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
-from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, StepControl
+from hoseline.procedures.contact.moving import ObstaclePath
+from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, StepControl, secant
 
 CONTACT_TOLERANCE = 1e-9  # loosest final residual: the barrier's stiffness (pressure / gap) lifts the rounding floor
 DOWNHILL_ITERATIONS = 1000  # of minimise_with_contact after a fold: a snap may travel far (a loop forming: 430)
@@ -29,6 +33,8 @@ LAST_STEP_ITERATIONS = 60  # for the smallest step, before the branch is judged 
 POLISHED_TOLERANCE = 1e-12  # what the end of a path is polished to, if two iterations reach it
 POLISH_ITERATIONS = 2
 STEP_HALVINGS = 10  # of a Newton step within a continuation step: a step that needs more is halved instead
+SMALLEST_MOVE = 1e-9  # of the path: the shortest step the move check of moving obstacles halves down to (an obstacle
+# pushing the hose may move less than the gap, d_hat / 2 or less, per step until there is a prediction)
 
 
 def follow_contact(
@@ -36,26 +42,50 @@ def follow_contact(
     path: Callable[[float], Clamps],
     props: RodProperties,
     state: RodState,
-    model: ContactModel,
+    model: ContactModel | ObstaclePath,
     *,
     start: float = 0.0,
     control: StepControl = StepControl(),
     log: ContinuationLog | None = None,
     progress: Progress | None = None,
+    before: RodState | None = None,
 ) -> tuple[RodState, int]:
     """Follow the stable equilibrium with contact from fraction `start` (where `state` is one) to 1.
 
-    Returns (state at fraction 1, Newton iterations used).  log: if given, its iteration and step
-    counters grow and every snap (loss of stability or fold) is recorded in log.events.
-    progress: optional callable(phase, fraction) after each step.  Raises PlacementError with the
-    phase, the fraction and Newton's message when the path cannot be followed.
+    Returns (state at fraction 1, Newton iterations used).  model: the obstacles' ContactModel, or an
+    ObstaclePath when they move along the path: each step then starts from the secant prediction of the
+    last two equilibria (`before`, the equilibrium one whole path back, if given, stands in for the first)
+    or from the last equilibrium, the first the move check admits (procedures/contact/moving.py); where
+    neither is admitted the step is halved.  log: if given, its iteration and step counters grow and
+    every snap (loss of stability or fold) is recorded in log.events.  progress: optional
+    callable(phase, fraction) after each step.  Raises PlacementError with the phase, the fraction and
+    Newton's message when the path cannot be followed, or when the obstacles cannot move on without
+    passing through the hose (no admitted step longer than SMALLEST_MOVE).
     """
+    moving = model if isinstance(model, ObstaclePath) else None
+    clamps_now, placed = path(start), moving.at(start) if moving is not None else None
+    previous = None if before is None else (start - 1.0, before)  # for the secant prediction
     t, dt, iterations = start, min(control.first, 1.0 - start), 0
     while t < 1.0 - 1e-14:
         t_next = min(1.0, t + dt)
+        clamps = path(t_next)
         tolerance = max(control.tolerance, CONTACT_TOLERANCE) if t_next == 1.0 else control.path_tolerance
+        begin, model_next, placed_next = state, model, None
+        if moving is not None:
+            placed_next = moving.at(t_next)
+            model_next = placed_next.model
+            guesses = [state] if previous is None else [secant(previous, (t, state), t_next), state]
+            begin = moving.obstacles.start(props, (clamps_now, state, placed), clamps, placed_next, guesses)
+            if begin is None and 0.5 * dt < SMALLEST_MOVE:
+                raise PlacementError(
+                    f"{phase} with contact: the contact obstacles cannot move on from fraction {t:.4f} without "
+                    f"passing through the hose (every step down to {dt:.2g} of the path would carry one across it or "
+                    "into it); make the hose clear the moving obstacles, or move them less between poses")
+            if begin is None:
+                dt *= 0.5
+                continue
         last_try = 0.5 * dt < control.smallest
-        trial, report = solve_with_contact(props, path(t_next), state, model, tolerance=tolerance,
+        trial, report = solve_with_contact(props, clamps, begin, model_next, tolerance=tolerance,
                                            max_iterations=LAST_STEP_ITERATIONS if last_try else STEP_ITERATIONS,
                                            max_halvings=30 if last_try else STEP_HALVINGS)
         iterations += report.iterations
@@ -68,15 +98,16 @@ def follow_contact(
             dt *= 0.5
             continue
         elif not report.converged:  # the branch ends in a fold: the hose snaps
-            start_from, what = state, f"the equilibrium branch ended near fraction {t:.4f} (fold)"
+            start_from, what = begin, f"the equilibrium branch ended near fraction {t:.4f} (fold)"
         else:
             start_from = None
         if start_from is not None:
-            trial, used = _snap(phase, path(t_next), props, state, start_from, model, tolerance, t, t_next, what,
+            trial, used = _snap(phase, clamps, props, state, start_from, model_next, tolerance, t, t_next, what,
                                 report, log)
             iterations += used
             dt = min(control.first, 1.0 - t_next)
-        state, t = trial, t_next
+        previous = (t, state) if start_from is None else None  # no secant across a snap
+        state, t, clamps_now, placed = trial, t_next, clamps, placed_next
         if log is not None:
             log.steps += 1
         if progress is not None:
@@ -85,7 +116,8 @@ def follow_contact(
             dt = min(control.largest, 2.0 * dt)
     # the end of the path, polished: Newton converges quadratically, so one or two more iterations take the
     # residual from CONTACT_TOLERANCE to rounding (the load balance then holds to its last digits); kept if stable
-    polished, report = solve_with_contact(props, path(1.0), state, model, tolerance=POLISHED_TOLERANCE,
+    final_model = placed.model if moving is not None else model
+    polished, report = solve_with_contact(props, path(1.0), state, final_model, tolerance=POLISHED_TOLERANCE,
                                           max_iterations=POLISH_ITERATIONS)
     iterations += report.iterations
     if log is not None:

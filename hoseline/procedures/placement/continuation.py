@@ -176,7 +176,7 @@ def follow(
     while t < 1.0 - 1e-14:
         t_next = min(1.0, t + dt)
         clamps = path(t_next)
-        guess = state if previous is None else _secant(previous, (t, state), t_next)
+        guess = state if previous is None else secant(previous, (t, state), t_next)
         tolerance = control.tolerance if t_next == 1.0 else control.path_tolerance
         trial, report = solve_equilibrium(props, clamps, guess, tolerance=tolerance)
         if not report.converged and guess is not state:
@@ -222,8 +222,9 @@ def _moved_off(
     return correction > max(control.largest_correction * predicted, 1e-3 * props.length)
 
 
-def _secant(previous: tuple[float, RodState], current: tuple[float, RodState], t_next: float) -> RodState:
-    """Linear extrapolation of the equilibrium path to t_next (frames on the rotation group)."""
+def secant(previous: tuple[float, RodState], current: tuple[float, RodState], t_next: float) -> RodState:
+    """Linear extrapolation of the equilibrium path, given at two fractions (fraction, state), to t_next (frames on
+    the rotation group)."""
     (t0, s0), (t1, s1) = previous, current
     ratio = (t_next - t1) / (t1 - t0)
     frames = extrapolate_frames(s0.frames, s1.frames, ratio)

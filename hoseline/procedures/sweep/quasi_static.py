@@ -5,7 +5,7 @@
    a fitting tip P to R P + p and its frame F to F R^T.
 3. Each pose starts from the previous equilibrium.  A secant predictor and one Newton
    solve usually reach it in two or three iterations.  When that fails, ends on an
-   unstable equilibrium, or moves the hose much more than the mounts moved, the step is
+   unstable equilibrium, or moves the hose much more than the mounts (or contact obstacles) moved, the step is
    followed instead by continuation (continuation.follow) along the interpolated body
    poses (slerp of the rotations), with sub-steps, stability monitoring and branch
    switching; a loss of stability there is a snap-through, recorded with its jump.
@@ -13,12 +13,14 @@
    every obstacle (exact, clearance.py).  Clips move with their bodies like the fittings
    (point and frame), each clip's roll as found at assembly (fixed clips locked, rotating
    and sliding clips free); their reactions, and the arc length of sliding clips, per pose.
-5. With contact ([contact] in the problem: static analytic obstacles, self-contact) every pose is
-   solved with the contact Newton from the previous equilibrium (which clears everything; the
-   obstacles do not move), and followed by contact continuation (procedures/contact/) along the
-   interpolated poses when the direct solve fails; no branch switching there (a loss of stability
-   fails the sweep at that pose).  Per pose and obstacle: the smallest gap, the total force and the
-   length in contact; the start mount's reaction includes the contact loads.
+5. With contact ([contact] in the problem: obstacles fixed or moving with a body, self-contact)
+   every pose is solved with the contact Newton, with the obstacles moved to the pose
+   (procedures/contact/moving.py), from the secant prediction or the previous equilibrium, the
+   first that the move check admits (no obstacle can have passed through the hose on the way
+   there), and followed by contact continuation (procedures/contact/) along the interpolated poses
+   of the bodies, obstacles' too, when that fails; a fold or a loss of stability there is a snap
+   downhill.  Per pose and obstacle: the smallest gap, the total force and the length in contact;
+   the start mount's reaction includes the contact loads.
 6. Optionally the same sweep with the end fitting free to spin (the common modelling error
    the seed paper warns about), and the separation of the two answers.
 """
@@ -27,23 +29,31 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.clipped_newton import clip_arc_lengths, clip_reactions, station_positions
-from hoseline.mechanics.newton import node_positions, solve_equilibrium
+from hoseline.mechanics.contact_newton import ContactModel, solve_with_contact
+from hoseline.mechanics.newton import NewtonReport, node_positions, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
-from hoseline.mechanics.rotations import extrapolate_frames
-from hoseline.mechanics.contact_newton import solve_with_contact
 from hoseline.model.motion import Pose, interpolate
 from hoseline.model.mounts import Mount, single_plane_offset
 from hoseline.model.sweep import SweepProblem
 from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact
+from hoseline.procedures.contact.moving import MovingObstacles, ObstaclePath
 from hoseline.procedures.contact.placement import contact_forces_beyond, contact_reports, problem_contact_model
 from hoseline.procedures.geometry.clearance import TriangleIndex, nearest_with_fittings
-from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, StepControl, follow
+from hoseline.procedures.placement.continuation import (
+    ContinuationLog,
+    PlacementError,
+    Progress,
+    StepControl,
+    follow,
+    secant,
+)
 from hoseline.procedures.placement.hose_health import hose_health
 from hoseline.procedures.placement.sequence import rod_properties, solve, weight_vector
 from hoseline.procedures.placement.result import Result
@@ -56,10 +66,12 @@ PLAIN = StepControl(first=1.0, largest=1.0)  # one step, halved as needed
 
 @dataclass
 class _Reached:
-    """One pose reached: the state, its clamps, the Newton iterations and what was logged."""
+    """One pose reached: the state, its clamps, the contact model there (None without contact), the Newton
+    iterations and what was logged."""
 
     state: RodState
     clamps: Clamps
+    contact: ContactModel | None
     iterations: int
     events: list[str]
     jump: float
@@ -81,7 +93,8 @@ class _Tracker:
         self.end_frame = assembly.end_frame
         self.log = ContinuationLog()
         self.bodies = (sweep.start_body, sweep.end_body) + tuple(sweep.clip_body(j) for j in range(len(assembly.clips)))
-        self.poses = tuple(Pose() for _ in self.bodies)
+        contact_bodies = tuple(sweep.contact_body(j) for j in range(len(sweep.problem.contact)))
+        self.poses = {body: Pose() for body in (*self.bodies, *contact_bodies)}  # of every body that carries something
         # the clips as held at assembly (the roll found included: a free roll starts from zero here)
         self.clips = tuple(
             ClipHold(int(np.argmin(np.abs(assembly.s - clip.arc_length))), clip.point, clip.frame,
@@ -93,11 +106,14 @@ class _Tracker:
                               np.array([clip.force for clip in assembly.clips]).reshape(count, 3), np.zeros(count),
                               np.array([clip.arc_length for clip in assembly.clips]))
         self.before: RodState | None = None  # the equilibrium one pose back, for the secant predictor
-        self.contact = problem_contact_model(sweep.problem) if sweep.problem.has_contact else None
+        self.obstacles = (MovingObstacles(problem_contact_model(sweep.problem), contact_bodies)
+                          if sweep.problem.has_contact else None)
+        self.placed = self.obstacles.at(self.poses) if self.obstacles is not None else None
 
-    def clamps(self, start: Pose, end: Pose, *clip_poses: Pose) -> Clamps:
-        """The clamps with the start body at `start`, the end body at `end` and each clip's body at its pose."""
+    def clamps(self, poses: Mapping[str | None, Pose]) -> Clamps:
+        """The clamps with each body at poses[body]: the fittings' and the clips'."""
         problem = self.sweep.problem
+        start, end, *clip_poses = (poses[body] for body in self.bodies)
         return Clamps(
             start_point=start.point(problem.start.point),
             start_frame=start.frame(self.start_frame),
@@ -114,61 +130,70 @@ class _Tracker:
 
     def move_to(self, index: int) -> _Reached:
         """Reach the equilibrium at sweep pose `index` from the current one."""
-        sweep = self.sweep
-        target = tuple(sweep.pose(body, index) for body in self.bodies)
-        clamps = self.clamps(*target)
+        target = {body: self.sweep.pose(body, index) for body in self.poses}
+        clamps = self.clamps(target)
         old_nodes = stations(self.props, clamps, self.state)
-        limit = JUMP_FACTOR * self._mount_movement(target) + 1e-6 * self.props.length
-        if self.contact is None:
-            guess = self.state if self.before is None else _secant(self.before, self.state)
-            trial, report = solve_equilibrium(self.props, clamps, guess)
-        else:  # from the previous equilibrium, which clears everything (a secant guess might not)
-            trial, report = solve_with_contact(self.props, clamps, self.state, self.contact, tolerance=CONTACT_TOLERANCE)
+        limit = JUMP_FACTOR * self._largest_carry(target, old_nodes) + 1e-6 * self.props.length
+        guesses = [self.state] if self.before is None else [_secant(self.before, self.state), self.state]
+        placed = None
+        if self.obstacles is None:
+            trial, report = solve_equilibrium(self.props, clamps, guesses[0])
+        else:  # from the prediction or the previous equilibrium, if no obstacle can pass through the hose on the way
+            placed = self.obstacles.at(target)
+            begin = self.obstacles.start(self.props, (self.clamps(self.poses), self.state, self.placed), clamps, placed,
+                                         guesses)
+            trial, report = self.state, NewtonReport(False, 0, math.inf, -1, "no start the move check admits")
+            if begin is not None:
+                trial, report = solve_with_contact(self.props, clamps, begin, placed.model, tolerance=CONTACT_TOLERANCE)
         iterations = report.iterations
         events: list[str] = []
         jump = _largest_movement(old_nodes, stations(self.props, clamps, trial)) if report.converged else math.inf
         if not (report.converged and report.unstable_directions == 0 and jump <= limit):
             start_poses = self.poses
 
+            def poses(t: float) -> dict[str | None, Pose]:
+                return {body: interpolate(start_poses[body], target[body], t) for body in target}
+
             def path(t: float) -> Clamps:
-                return self.clamps(*(interpolate(old, new, t) for old, new in zip(start_poses, target)))
+                return self.clamps(poses(t))
 
             control = PLAIN if not report.converged else CAREFUL
             logged, counted = len(self.log.events), self.log.iterations
-            if self.contact is None:
+            if self.obstacles is None:
                 trial = follow(f"step to pose {index}", path, self.props, self.state, self.log, control=control)
-            else:  # a start mount that moved may carry the old shape into an obstacle: the sub-steps shrink until clear
-                trial = follow_contact(f"step to pose {index}", path, self.props, self.state, self.contact,
-                                       control=control, log=self.log)[0]
+            else:
+                trial = follow_contact(f"step to pose {index}", path, self.props, self.state,
+                                       ObstaclePath(self.obstacles, poses), control=control, log=self.log,
+                                       before=self.before)[0]
             events = self.log.events[logged:]
             iterations += self.log.iterations - counted
             jump = _largest_movement(old_nodes, stations(self.props, clamps, trial))
-            self.before = None  # a new branch or a sharp turn: no secant across it
+            # a new branch or a sharp turn: no secant across it (with contact only across a snap: the move check
+            # keeps a poor prediction from being used, and an obstacle that moves with the hose needs one)
+            self.before = self.state if self.obstacles is not None and not events else None
         else:
-            self.before = None if self.contact is not None else self.state
-        self.state, self.poses = trial, target
-        return _Reached(trial, clamps, iterations, events, jump)
+            self.before = self.state
+        self.state, self.poses, self.placed = trial, target, placed
+        return _Reached(trial, clamps, None if placed is None else placed.model, iterations, events, jump)
 
-    def _mount_movement(self, target: tuple[Pose, ...]) -> float:
-        """A bound (mm) of how far a station moves if the hose moved rigidly with either mount (or a clip)."""
+    def _largest_carry(self, target: Mapping[str | None, Pose], nodes: np.ndarray) -> float:
+        """A bound (mm) of how far a station moves if the hose moved rigidly with either mount, a clip, or the body
+        of a contact obstacle (`nodes`: the stations now, mm)."""
         problem = self.sweep.problem
-        moves = []
+        moves = [0.0]
         points = (problem.start.point, problem.end.point) + tuple(clip.point for clip in self.clips)
-        for old, new, point in zip(self.poses, target, points):
+        for body, point in zip(self.bodies, points):
+            old, new = self.poses[body], target[body]
             moves.append(float(np.linalg.norm(new.point(point) - old.point(point))) + self.props.length * old.angle_to(new))
+        for body in () if self.obstacles is None else set(self.obstacles.bodies) - {None}:
+            carry = self.poses[body].inverse().then(target[body])
+            moves.append(float(np.max(np.linalg.norm(carry.points(nodes) - nodes, axis=1))))
         return max(moves)
 
 
 def _secant(before: RodState, current: RodState) -> RodState:
     """The next equilibrium guessed by repeating the last step (poses about evenly spaced)."""
-    return RodState(
-        extrapolate_frames(before.frames, current.frames, 1.0),
-        2.0 * current.end_force - before.end_force,
-        2.0 * current.roll - before.roll,
-        2.0 * current.clip_forces - before.clip_forces,
-        2.0 * current.clip_rolls - before.clip_rolls,
-        2.0 * current.clip_arc_lengths - before.clip_arc_lengths,
-    )
+    return secant((0.0, before), (1.0, current), 2.0)
 
 
 def stations(props, clamps: Clamps, state: RodState) -> np.ndarray:
@@ -231,9 +256,9 @@ def _run_sweep(sweep: SweepProblem, progress: Progress | None, equilibria: list 
             clip_arcs[k] = clip_arc_lengths(tracker.props, reached.clamps, reached.state)
         mounts[:, k] = _mount_geometry(reached.clamps)
         health.append(hose_health(tracker.props, reached.clamps, reached.state, problem.hose.outer_radius))
-        if tracker.contact is not None:
+        if reached.contact is not None:
             touching.append(_contacts_at(k, tracker, reached))
-            beyond = contact_forces_beyond(tracker.props, reached.clamps, reached.state, tracker.contact)
+            beyond = contact_forces_beyond(tracker.props, reached.clamps, reached.state, reached.contact)
             health[-1] = replace(health[-1], start_force=health[-1].start_force - beyond[0])
         iterations[k] = reached.iterations
         if reached.events:
@@ -301,7 +326,7 @@ def _run_sweep(sweep: SweepProblem, progress: Progress | None, equilibria: list 
 def _contacts_at(index: int, tracker: _Tracker, reached: _Reached) -> list:
     """The contact reports (procedures/contact/placement.contact_reports) at pose `index`; PlacementError if the
     hose enters anything there (the contact solver's guarantee failed)."""
-    reports = contact_reports(tracker.sweep.problem, tracker.props, reached.clamps, reached.state, tracker.contact)
+    reports = contact_reports(tracker.sweep.problem, tracker.props, reached.clamps, reached.state, reached.contact)
     worst = min(reports, key=lambda report: report.min_gap)
     if worst.min_gap < 0.0:
         raise PlacementError(f"sweep with contact: at pose {index} the hose enters {worst.name!r} by "
