@@ -36,6 +36,7 @@ from dataclasses import replace
 import numpy as np
 
 from hoseline.compilation import PACKAGE, compiling, is_compiled, persistent, version_folder
+from hoseline.mechanics.contact_motion import moved_model
 from hoseline.mechanics.energy import BANDWIDTH
 from hoseline.mechanics.newton import RodProperties, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, RodState, centerline
@@ -43,8 +44,10 @@ from hoseline.mechanics.rotations import rotate_frames
 from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model import Hose, Mount, Problem
 from hoseline.model.clips import Clip
+from hoseline.model.motion import Pose
 from hoseline.model.obstacles import Box, Cylinder, Plane, Sphere
 from hoseline.model.stiffeners import thesis_preset
+from hoseline.procedures.contact.placement import problem_contact_model
 from hoseline.procedures.geometry.clearance import TriangleIndex
 from hoseline.procedures.placement.sequence import solve
 
@@ -101,6 +104,8 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
     if contact:
         with compiling("contact"):
             solve(CONTACT_PLACEMENT, estimate_error=False)
+            model = problem_contact_model(CONTACT_PLACEMENT)  # a sweep's obstacles moved with their bodies
+            moved_model(model, [Pose(position=np.array([1.0, 0.0, 0.0]))] * len(model.names))
 
 
 def small_clips() -> tuple[Clip, Clip]:
