@@ -257,8 +257,10 @@ class StepFilter:
     Meshes are surfaces, not bodies (contact_mesh.py, step filter): the whole path of every station
     and of every segment near an edge must stay clear by SAFE_FRACTION of its gap now.  swept: (the
     stations now (N+1, 3) mm, their gaps to the meshes (N+1,) mm, inf where out of reach, the bound
-    (N+1,) mm of each station path's distance from its chord for the whole step, and the
-    segment-edge pairs within reach (segments, edges, gaps mm)), or None without meshes.
+    (N+1,) mm of each station path's distance from its chord for the whole step), or None without
+    meshes; the segment-edge pairs are listed at each trial, within the reach of its real move (the
+    chords of its stations and their bend: far tighter than the bound of the whole step, which on a
+    fine mesh took thousands of edges in).
     """
 
     pairs: tuple
@@ -298,14 +300,25 @@ class StepFilter:
         The path of station k lies within alpha^2 bend_k of its chord (contact_mesh.py), so its gap along the
         step is at least the chord's gap less that; a segment's points within alpha^2 bend of the segment
         carried along its ends' chords (contact_mesh.swept_edges_clear)."""
-        start, gaps, bend, (segments, edges, edge_gaps) = self.swept
-        near = np.isfinite(gaps)
+        start, gaps, bend = self.swept
+        bend = alpha * alpha * bend
+        # how far each station, and each segment's points, can be from where they are now along the move: its chord
+        # and the bend; a station or segment-edge pair whose gap cannot shrink to SAFE_FRACTION of it by that much
+        # is clear whatever the path (as `watched` for the analytic pairs), and is not checked
+        moves = np.linalg.norm(nodes - start, axis=1) + bend
+        near = (1.0 - SAFE_FRACTION) * gaps < moves  # False where the gap is inf (out of reach)
         if np.any(near):
             chord_gaps = np.min(model.mesh.segment_gaps(start[near], nodes[near], model.hose_radius, math.inf)[0],
                                 axis=0)
-            if not np.all(chord_gaps - alpha * alpha * bend[near] > SAFE_FRACTION * gaps[near]):
+            if not np.all(chord_gaps - bend[near] > SAFE_FRACTION * gaps[near]):
                 return False
-        clearances = model.hose_radius + SAFE_FRACTION * edge_gaps + alpha * alpha * bend[segments + 1]
+        segment_moves = np.maximum(moves[:-1], moves[1:])
+        kinds, segments, edges, edge_gaps = model.mesh.pairs(start, model.hose_radius,
+                                                             (np.zeros(start.shape[0]), segment_moves / (1.0 - SAFE_FRACTION)),
+                                                             every_feature=True)
+        on_edges = kinds == SEGMENT_EDGE
+        segments, edges, edge_gaps = segments[on_edges], edges[on_edges], edge_gaps[on_edges]
+        clearances = model.hose_radius + SAFE_FRACTION * edge_gaps + bend[segments + 1]
         return bool(swept_edges_clear(start, nodes, segments, edges, model.mesh.edges, clearances, SWEPT_EVALUATIONS))
 
 
@@ -328,14 +341,10 @@ def motion_filter(nodes: np.ndarray, turns: np.ndarray, start_move: float, h: fl
     kinds, first, second, gaps = model.pairs(nodes, cutoff, meshes=False)
     swept = None
     if model.mesh.count:
-        station_cutoffs, segment_cutoffs = reach + model.activation, reach[1:] + model.activation
-        mesh_kinds, segments, edges, edge_gaps = model.mesh.pairs(nodes, model.hose_radius,
-                                                                  (np.zeros_like(reach), segment_cutoffs), every_feature=True)
-        on_edges = mesh_kinds == SEGMENT_EDGE
         station_gaps = np.min(model.mesh.segment_gaps(nodes, nodes, model.hose_radius, cutoff)[0], axis=0)
-        station_gaps[station_gaps >= station_cutoffs] = math.inf  # out of reach
+        station_gaps[station_gaps >= reach + model.activation] = math.inf  # out of reach
         bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
-        swept = (nodes, station_gaps, bend, (segments[on_edges], edges[on_edges], edge_gaps[on_edges]))
+        swept = (nodes, station_gaps, bend)
     if kinds.size == 0:
         return StepFilter((kinds, first, second), gaps, 1.0, swept)
     last = nodes.shape[0] - 1
