@@ -113,21 +113,26 @@ def triangle_parameters(x, a, b, c):
     EDGE_BC (u + v = 1), or a vertex.  abc must have a positive area (contact_mesh.py leaves
     zero-area triangles out).
     """
-    ab = b - a
-    ac = c - a
-    d1 = _dot3(ab, x - a)
-    d2 = _dot3(ac, x - a)
+    # in scalars: the mesh pairs take it for every triangle near every station, where the small arrays of vector
+    # expressions (allocated per call) cost more than the arithmetic
+    abx, aby, abz = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    acx, acy, acz = c[0] - a[0], c[1] - a[1], c[2] - a[2]
+    xax, xay, xaz = x[0] - a[0], x[1] - a[1], x[2] - a[2]
+    d1 = abx * xax + aby * xay + abz * xaz
+    d2 = acx * xax + acy * xay + acz * xaz
     if d1 <= 0.0 and d2 <= 0.0:
         return 0.0, 0.0, VERTEX_A
-    d3 = _dot3(ab, x - b)
-    d4 = _dot3(ac, x - b)
+    xbx, xby, xbz = x[0] - b[0], x[1] - b[1], x[2] - b[2]
+    d3 = abx * xbx + aby * xby + abz * xbz
+    d4 = acx * xbx + acy * xby + acz * xbz
     if d3 >= 0.0 and d4 <= d3:
         return 1.0, 0.0, VERTEX_B
     vc = d1 * d4 - d3 * d2
     if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
         return d1 / (d1 - d3), 0.0, EDGE_AB
-    d5 = _dot3(ab, x - c)
-    d6 = _dot3(ac, x - c)
+    xcx, xcy, xcz = x[0] - c[0], x[1] - c[1], x[2] - c[2]
+    d5 = abx * xcx + aby * xcy + abz * xcz
+    d6 = acx * xcx + acy * xcy + acz * xcz
     if d6 >= 0.0 and d5 <= d6:
         return 0.0, 1.0, VERTEX_C
     vb = d5 * d2 - d1 * d6

@@ -331,8 +331,10 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
             for position in items_within(x, x, reach, t_lower, t_upper, t_children, t_ranges, root, stack):
                 a, b, c = triangles[position, 0], triangles[position, 1], triangles[position, 2]
                 u, v, feature = triangle_parameters(nodes[k], a, b, c)
-                r = nodes[k] - ((1.0 - u - v) * a + u * b + v * c)
-                distance = np.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+                distance = 0.0
+                for j in range(3):
+                    distance += (nodes[k, j] - ((1.0 - u - v) * a[j] + u * b[j] + v * c[j])) ** 2
+                distance = np.sqrt(distance)
                 if not every_feature and (feature == FACE or not (features[position] >> feature) & 1):
                     if not _takes(nodes[k], flat_edges[position], flat_sides[position]):
                         continue  # over a neighbour in its plane, or on the flat edge or vertex it gives to another
@@ -371,8 +373,11 @@ def _takes(x, flat_edges, flat_sides):
     for e in range(3):
         if flat_sides[e, 0] != 0.0:
             p, q, m = flat_edges[e, 0], flat_edges[e, 1], flat_edges[e, 2]
-            end = p if np.sum((x - p) ** 2) <= np.sum((x - q) ** 2) else q
-            side = flat_sides[e, 0] * np.sum(np.cross(q - p, x - end) * m)
+            end = p if _squared_distance(x, p) <= _squared_distance(x, q) else q
+            # (q - p) x (x - end) . m in scalars, in np.cross's order (the tie rule needs the same bits everywhere)
+            ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
+            wx, wy, wz = x[0] - end[0], x[1] - end[1], x[2] - end[2]
+            side = flat_sides[e, 0] * ((uy * wz - uz * wy) * m[0] + (uz * wx - ux * wz) * m[1] + (ux * wy - uy * wx) * m[2])
             if side < 0.0 or (side == 0.0 and flat_sides[e, 1] < 0.0):
                 return False
     return True
