@@ -8,7 +8,9 @@ between coaxial mounts 100 mm apart twisted 720 deg, which snaps (the contact Ne
 loop touching itself (once, about 10 s).  --mesh: the issue's case, the thesis hose (100 segments, 180 deg
 of twist) with one fixed clip at station 50 and self-contact, pushed 1 mm aside by a strut (a cylinder of
 radius 15 mm meshed with 100 000 triangles) at station 25, against the same hose with the clip and no
-contact, and with the strut as an analytic cylinder.  Run: python bench/bench_contact_placement.py [--loop] [--plectoneme] [--mesh]
+contact, and with the strut as an analytic cylinder; with --sweep also each one's sweep of 200 poses, the end
+fitting moved 10 mm down (poses per second of the solver).  Run:
+python bench/bench_contact_placement.py [--loop] [--plectoneme] [--mesh [--sweep]]
 """
 
 import os
@@ -21,8 +23,11 @@ import numpy as np
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.model.clips import Clip
+from hoseline.model.motion import Translation, generated_motion
 from hoseline.model.obstacles import Cylinder, Mesh
+from hoseline.model.sweep import SweepProblem
 from hoseline.procedures.placement.sequence import solve
+from hoseline.procedures.sweep.quasi_static import run_sweep
 
 BASE = {"hose": {"length": 335.0, "outer_diameter": 10.0, "bending_stiffness": 1e5, "segments": 50},
         "start": {"point": [-100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
@@ -32,6 +37,9 @@ LOOP = {"hose": {"length": 1000.0, "outer_diameter": 10.0, "bending_stiffness": 
                  "segments": 50},
         "start": {"point": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0]},
         "end": {"point": [150.0, 2.0, 0.0], "direction": [-1.0, 0.0, 0.0]}, "contact": {"self": True}}
+
+# --sweep: the end fitting moved 10 mm down in 200 poses (0.05 mm a pose), the hose held by its clip and the strut
+SWEEP_MOTION = Translation(np.array([0.0, 0.0, -1.0]), (0.0, 10.0), steps=199, name="drop")
 
 PLECTONEME = {"hose": {"length": 200.0, "outer_diameter": 4.0, "bending_stiffness": 1e5, "torsional_stiffness": 8e4,
                        "segments": 40},
@@ -83,6 +91,12 @@ def mesh_case() -> None:
         print(f"{label:32s} once   {1e3 * (time.perf_counter() - started):8.1f} ms  {result.iterations:5d} Newton "
               f"iterations  {result.steps:4d} steps" + (f"; smallest gap {gap:.4f} mm" if gap is not None else ""),
               flush=True)
+        if "--sweep" in sys.argv:
+            sweep = run_sweep(SweepProblem(problem, None, "arm", (generated_motion("arm", [SWEEP_MOTION]),),
+                                           compare_free_roll=False))
+            performance = sweep.performance()
+            print(f"{'':32s} sweep of {sweep.pose_count} poses: {performance['poses per second (solver)']:8.0f} poses/s, "
+                  f"{performance['Newton iterations per pose']:.1f} Newton iterations per pose", flush=True)
     print(f"load average {os.getloadavg()[0]:.1f}")
 
 

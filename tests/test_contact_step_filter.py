@@ -9,6 +9,7 @@ helix whose turns nearly touch (self-contact) beside a floor and a capsule:
 """
 
 import numpy as np
+import pytest
 
 from hoseline.mechanics.contact import SEGMENT_SEGMENT, listed_gaps
 from hoseline.mechanics.contact_newton import SAFE_FRACTION, ContactModel, step_filter
@@ -98,3 +99,17 @@ def test_admits_decides_as_the_exact_gaps_of_every_pair():
             assert watch.admits(props, clamps, trial, model, alpha) == expected
             decisions.add(expected)
     assert decisions == {True, False} and mixed  # both answers were met, with self and obstacle pairs watched
+
+
+def test_the_smallest_self_gap_is_that_of_every_pair():
+    """ContactModel.smallest_gaps finds the smallest self-contact gap by a growing cutoff, not over every pair: the
+    same as the exact gaps of every pair, for the helix (passes nearly touching) and for it stretched straight."""
+    rng = np.random.default_rng(10)
+    props, clamps, state, model = _helix_beside_obstacles(rng)
+    first, second = np.triu_indices(props.segments, model.self_exclusion + 1)
+    straight = np.zeros_like(state.frames[:, 0, :])
+    straight[:, 2] = 1.0
+    for nodes in (centerline(state.frames, clamps.start_point, H), np.cumsum(np.vstack([np.zeros(3), straight]), axis=0)):
+        every = _self_gaps(nodes, model, first, second)
+        assert model.smallest_gaps(nodes)["self"] == pytest.approx(float(np.min(every)), abs=1e-12)
+        assert model.smallest_gap(nodes) <= float(np.min(every))

@@ -68,6 +68,8 @@ def _affine(points, rotation, translation):
 
 def moved_model(model: ContactModel, poses: Sequence[Pose | None]) -> ContactModel:
     """`model` with obstacle j (model.names[j]) carried rigidly by poses[j] from where it is (None: it stays)."""
+    if all(pose is None for pose in poses):  # nothing moves (a sweep's fixed obstacles): no copy
+        return model
     planes, balls, capsules = model.planes.copy(), model.balls.copy(), model.capsules.copy()
     for i, owner in enumerate(model.owners_planes):
         if poses[owner] is not None:
@@ -123,6 +125,8 @@ def _refit(items: np.ndarray, boxes: tuple, tree: tuple, roots: np.ndarray, m: i
 def only(model: ContactModel, obstacles: Collection[int], *, self_contact: bool) -> ContactModel:
     """The part of `model` with only the obstacles of index in `obstacles` (model.names), and self-contact if asked
     (and the model has it); the meshes left out keep their arrays, their trees' roots set to -1."""
+    if len(obstacles) == len(model.names) and (self_contact or model.self_exclusion < 0):
+        return model  # all of it (a sweep whose obstacles are all fixed)
     keep = np.array(sorted(obstacles), dtype=np.int64)
     planes, balls, capsules = (np.isin(owners, keep) for owners in
                                (model.owners_planes, model.owners_balls, model.owners_capsules))
