@@ -342,6 +342,25 @@ def test_pairs_found_through_the_tree_are_those_of_all_triangles():
         assert sorted(zip(*[a.tolist() for a in found[:3]])) == sorted(zip(*[a.tolist() for a in brute[:3]]))
 
 
+
+def test_the_smallest_gap_to_a_mesh_is_that_of_the_nearest_triangle_of_every_segment():
+    """MeshArrays.smallest_gaps (a bound grown until a segment is below it) against segment_gaps with no bound (the
+    nearest triangle of every segment), for a hose touching the drum, near it, and far from it; and per-segment bounds
+    of segment_gaps: the exact gap below each segment's own bound, the bound where the mesh is farther."""
+    rng = np.random.default_rng(4)
+    vertices, faces = _faceted_drum(24, rows=6)
+    mesh = pack_meshes([(vertices, faces)], [0])
+    nodes = np.cumsum(np.vstack([[[-60.0, -30.0, 38.0]], 6.0 * rng.standard_normal((30, 3)) + [4.0, 2.0, 0.0]]), axis=0)
+    for lift in (0.0, 3.0, 300.0):
+        moved = nodes + [0.0, 0.0, lift]
+        every = mesh.segment_gaps(moved[:-1], moved[1:], 1.0, np.inf)[0]
+        assert mesh.smallest_gaps(moved[:-1], moved[1:], 1.0, 0.01) == pytest.approx(np.min(every, axis=1), abs=1e-12)
+        bounds = np.linspace(0.0, 2.0 * float(np.max(every)), moved.shape[0] - 1)
+        bounded, nearest = mesh.segment_gaps(moved[:-1], moved[1:], 1.0, bounds)
+        below = every[0] < bounds
+        assert np.all(nearest[0][below] >= 0) and np.allclose(bounded[0][below], every[0][below], atol=1e-12)
+        assert np.all(nearest[0][~below] < 0) and np.all(bounded[0][~below] == bounds[~below])
+
 BOX_BASE = {"hose": {"length": 600.0, "outer_diameter": 10.0, "bending_stiffness": 2e4, "mass_per_length": 0.5,
                      "segments": 60},
             "start": {"point": [-200.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0]},

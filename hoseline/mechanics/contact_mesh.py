@@ -159,12 +159,31 @@ of the searches, contact_motion.only).
                           *self.edge_tree, self.edge_roots, every_feature)
 
     def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
-                     bound: float) -> tuple[np.ndarray, np.ndarray]:
+                     bound: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(gaps (K, n) mm, triangles (K, n)): the exact gap of each capsule of `hose_radius` about the segments from
         `starts` to `ends` ((n, 3) mm) to each mesh (negative inside, -r crossing a triangle) and its nearest
-        triangle; `bound` and -1 where the mesh is farther than `bound` mm."""
-        return segment_gaps(starts, ends, hose_radius, bound, self.triangles, self.normals, *self.triangle_tree,
+        triangle; the bound and -1 where the mesh is farther than `bound` mm (one for all, or (n,) one each: the
+        search of a fine mesh costs the more, the larger it is)."""
+        bounds = np.full(starts.shape[0], float(bound)) if np.ndim(bound) == 0 else np.asarray(bound, dtype=float)
+        return segment_gaps(starts, ends, hose_radius, bounds, self.triangles, self.normals, *self.triangle_tree,
                             self.triangle_roots)
+
+    def smallest_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float, first_bound: float) -> np.ndarray:
+        """(K,) the smallest gap (mm) of the capsules of `hose_radius` about the segments from `starts` to `ends` to
+        each mesh: segment_gaps below a bound that grows eightfold from `first_bound` (mm) until every mesh has a
+        segment below it (the smallest of those is the smallest of all), far cheaper than the nearest triangle of
+        every segment."""
+        smallest = np.full(self.count, np.inf)
+        bound, span = float(first_bound), float(np.linalg.norm(np.ptp(np.vstack([starts, ends]), axis=0)))
+        wanted = self.triangle_roots >= 0
+        while True:
+            gaps, nearest = self.segment_gaps(starts, ends, hose_radius, bound)
+            found = np.any(nearest >= 0, axis=1)
+            smallest[found & wanted] = np.min(np.where(nearest >= 0, gaps, np.inf), axis=1)[found & wanted]
+            wanted &= ~found
+            if not np.any(wanted) or math.isinf(bound):
+                return smallest
+            bound = bound * 8.0 if bound < 1e6 * max(span, 1.0) else math.inf
 
 
 def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) -> MeshArrays:
@@ -399,22 +418,24 @@ def _edge_takes(p, q, corners, joints):
 
 
 @njit(cache=True)
-def segment_gaps(starts, ends, hose_radius, bound, triangles, normals, lower, upper, children, ranges, roots):
+def segment_gaps(starts, ends, hose_radius, bounds, triangles, normals, lower, upper, children, ranges, roots):
     """The exact gap (mm) of each segment starts[i] to ends[i] to each mesh and the nearest triangle, (K, n) each;
-    `bound` and -1 beyond it (and for a mesh whose root is -1: left out).
+    bounds[i] and -1 beyond bounds[i] (and for a mesh whose root is -1: left out).
 
     The segment-triangle distance (mechanics/proximity.py, zero where the segment crosses a triangle)
     less the hose radius, by branch and bound over each mesh's tree.
     """
     n_seg = starts.shape[0]
-    gaps = np.full((roots.shape[0], n_seg), bound)
+    gaps = np.empty((roots.shape[0], n_seg))
+    for m in range(roots.shape[0]):
+        gaps[m] = bounds
     nearest = -np.ones((roots.shape[0], n_seg), np.int64)
     stack = np.empty(STACK_SIZE, np.int64)
     for m in range(roots.shape[0]):
         if roots[m] < 0:  # a mesh left out (contact_motion.only)
             continue
         for i in range(n_seg):
-            d, position, _, _ = segment_search(point_of(starts, i), point_of(ends, i), bound + hose_radius,
+            d, position, _, _ = segment_search(point_of(starts, i), point_of(ends, i), bounds[i] + hose_radius,
                                                triangles, normals, lower, upper, children, ranges, roots[m], stack)
             if position >= 0:
                 gaps[m, i] = d - hose_radius

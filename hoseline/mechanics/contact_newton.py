@@ -140,7 +140,7 @@ class ContactModel:
                 smallest[name] = min(smallest[name], float(np.min(gaps[of_kind][owners[second[of_kind]] == owner])))
         for mesh in range(self.mesh.count):
             name = self.names[int(self.mesh.owners[mesh])]
-            smallest[name] = min(smallest[name], float(np.min(mesh_gaps[mesh])))
+            smallest[name] = min(smallest[name], float(mesh_gaps[mesh]))
         return smallest
 
     def smallest_gap(self, nodes: np.ndarray) -> float:
@@ -149,13 +149,12 @@ class ContactModel:
         return float(min(np.min(gaps, initial=math.inf), np.min(mesh_gaps, initial=math.inf), itself))
 
     def _all_gaps(self, nodes: np.ndarray):
-        """((kinds, second, gaps) of every analytic obstacle's pair, the (K, N) gaps of each segment to each mesh, the
-        smallest self-contact gap (inf without self-contact))."""
+        """((kinds, second, gaps) of every analytic obstacle's pair, the smallest gap (K,) to each mesh, the smallest
+        self-contact gap (inf without self-contact))."""
         no_self = -1
         kinds, _, second, gaps = pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, no_self,
                                            math.inf)
-        mesh_gaps = (self.mesh.segment_gaps(nodes[:-1], nodes[1:], self.hose_radius, math.inf)[0] if self.mesh.count
-                     else np.zeros((0, nodes.shape[0] - 1)))
+        mesh_gaps = self.mesh.smallest_gaps(nodes[:-1], nodes[1:], self.hose_radius, self.activation)
         return (kinds, second, gaps), mesh_gaps, self._smallest_self_gap(nodes)
 
     def _smallest_self_gap(self, nodes: np.ndarray) -> float:
@@ -333,8 +332,9 @@ class StepFilter:
         moves = np.linalg.norm(nodes - start, axis=1) + bend
         near = (1.0 - SAFE_FRACTION) * gaps < moves  # False where the gap is inf (out of reach)
         if np.any(near):
-            chord_gaps = np.min(model.mesh.segment_gaps(start[near], nodes[near], model.hose_radius, math.inf)[0],
-                                axis=0)
+            needed = SAFE_FRACTION * gaps[near] + bend[near]  # a chord farther than this is clear: no need to know more
+            chord_gaps = np.min(model.mesh.segment_gaps(start[near], nodes[near], model.hose_radius,
+                                                        needed + 1e-9 * (1.0 + needed))[0], axis=0)
             if not np.all(chord_gaps - bend[near] > SAFE_FRACTION * gaps[near]):
                 return False
         segment_moves = np.maximum(moves[:-1], moves[1:])
@@ -366,8 +366,9 @@ def motion_filter(nodes: np.ndarray, turns: np.ndarray, start_move: float, h: fl
     kinds, first, second, gaps = model.pairs(nodes, cutoff, meshes=False)
     swept = None
     if model.mesh.count:
-        station_gaps = np.min(model.mesh.segment_gaps(nodes, nodes, model.hose_radius, cutoff)[0], axis=0)
-        station_gaps[station_gaps >= reach + model.activation] = math.inf  # out of reach
+        station_cutoffs = reach + model.activation
+        station_gaps = np.min(model.mesh.segment_gaps(nodes, nodes, model.hose_radius, station_cutoffs)[0], axis=0)
+        station_gaps[station_gaps >= station_cutoffs] = math.inf  # out of reach
         bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
         swept = (nodes, station_gaps, bend)
     if kinds.size == 0:
