@@ -77,33 +77,6 @@ def _clamp01(value):
 
 
 @njit(cache=True)
-def segment_parameters(p1, q1, p2, q2):
-    """Parameters (s, t) in [0, 1] of the closest points p1 + s (q1 - p1), p2 + t (q2 - p2) of two segments.
-
-    Ericson, Real-Time Collision Detection (2005) 5.1.9, as mechanics/proximity.py's
-    closest_points_of_segments, which returns the points; the contact terms need the parameters.
-    """
-    d1 = q1 - p1
-    d2 = q2 - p2
-    r = p1 - p2
-    a = _dot3(d1, d1)
-    e = _dot3(d2, d2)
-    f = _dot3(d2, r)
-    c = _dot3(d1, r)
-    b = _dot3(d1, d2)
-    denominator = a * e - b * b
-    s = _clamp01((b * f - c * e) / denominator) if denominator > PARALLEL * a * e else 0.0
-    t = (b * s + f) / e
-    if t < 0.0:
-        t = 0.0
-        s = _clamp01(-c / a)
-    elif t > 1.0:
-        t = 1.0
-        s = _clamp01((b - c) / a)
-    return s, t
-
-
-@njit(cache=True)
 def triangle_parameters(x, a, b, c):
     """(u, v, feature) of the point (1 - u - v) a + u b + v c of triangle abc nearest to x.
 
@@ -253,7 +226,7 @@ def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges):
         a, b = nodes[j], nodes[j + 1]
         node[2], node[3] = j, j + 1
         radius = 0.0
-    s, t = segment_parameters(p, q, a, b)
+    _, s, t = segment_closest(p, q, a, b)
     points[2] = a
     points[3] = b
     c[0], c[1], c[2], c[3] = 1.0 - s, s, -(1.0 - t), -t
@@ -265,9 +238,14 @@ def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges):
 
 @njit(cache=True)
 def segment_closest(p, q, a, b):
-    """(distance mm, s, t) of the closest points p + s (q - p), a + t (b - a) of the segments pq and ab (a point
-    when a = b), as segment_parameters, in scalars.  The pair lists and the step filters take it for thousands of
-    pairs per Newton iteration, where small arrays (allocated per pair) cost ten times the arithmetic."""
+    """(distance mm, s, t) of the closest points p + s (q - p), a + t (b - a), s and t in [0, 1], of the segments pq
+    and ab (a point when a = b).
+
+    Ericson, Real-Time Collision Detection (2005) 5.1.9, as mechanics/proximity.py's
+    closest_points_of_segments, which returns the points; the contact terms need the parameters.  In
+    scalars: the pair lists and the step filters take it for thousands of pairs per Newton iteration,
+    where small arrays (allocated per pair) cost ten times the arithmetic.
+    """
     d1x, d1y, d1z = q[0] - p[0], q[1] - p[1], q[2] - p[2]
     d2x, d2y, d2z = b[0] - a[0], b[1] - a[1], b[2] - a[2]
     rx, ry, rz = p[0] - a[0], p[1] - a[1], p[2] - a[2]
