@@ -30,10 +30,10 @@ from hypothesis import HealthCheck, Phase, given, seed, settings  # noqa: E402
 # share of the inputs per kind (per mille): a sweep or a scan comparison that succeeds writes its report (PNGs,
 # HTML) and costs seconds, a refused input milliseconds, so the file formats get most of the inputs
 WEIGHTS = {"problem": 400, "iges": 220, "feasible": 150, "sweep": 60, "poses": 50, "mesh": 50, "feasible_sweep": 20,
-           "cloud": 50}
+           "cloud": 50, "contact": 100}
 # about how long one input of each kind takes, s (to start the slow kinds first)
 SECONDS_PER_INPUT = {"problem": 0.05, "iges": 0.05, "feasible": 0.25, "sweep": 1.0, "poses": 1.4, "mesh": 0.4,
-                     "feasible_sweep": 3.0, "cloud": 0.6}
+                     "feasible_sweep": 3.0, "cloud": 0.6, "contact": 1.0}
 EXAMPLES = 8  # error messages kept per kind and exit code
 OUTCOMES = ("exit 0", "exit 2", "exit 3", "exit 4") + FAILURES
 

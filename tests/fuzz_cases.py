@@ -12,11 +12,15 @@ Each kind of input starts from valid files and runs one command in-process:
     mesh            the same sweep, its obstacle mesh (STL, OBJ or PLY) mutated      -> hoseline sweep
     feasible_sweep  a random hose (up to 90 m long) and a random motion within reach -> hoseline sweep
     cloud           a problem and a synthetic scan (text or PLY), the scan mutated   -> hoseline compare
+    contact         a random problem with [contact]: self-contact and random planes, spheres, cylinders and
+                    boxes near the hose (the straight start may run through one: then a clear refusal);
+                    or the thesis problem with a [contact] table, mutated              -> hoseline solve
 
 The oracle (run_input) says what happened: exit 0, 2, 3 or 4 with nothing wrong, or one of
 FAILURES: an exception other than SystemExit (a traceback), another exit code, files left
 behind after a failure, an error without an "error:" line, a refused feasible input, or an
-exit-0 result that is not finite, converged, stable and of exact length.  Units: mm.
+exit-0 result that is not finite, converged, stable and of exact length, or (with contact) enters an
+obstacle or itself by more than CONTACT_TOLERANCE_MM.  Units: mm.
 """
 
 from __future__ import annotations
@@ -39,9 +43,10 @@ from typer.testing import CliRunner
 
 from hoseline import cli
 
-KINDS = ("problem", "iges", "feasible", "sweep", "poses", "mesh", "feasible_sweep", "cloud")
+KINDS = ("problem", "iges", "feasible", "sweep", "poses", "mesh", "feasible_sweep", "cloud", "contact")
 FAILURES = ("traceback", "hang", "exit_code", "partial_output", "unclear_error", "refused_valid", "bad_result")
 TIMEOUT_S = 60  # a run longer than this is a hang
+CONTACT_TOLERANCE_MM = 1e-3  # a converged result with contact may not enter anything deeper (issue 11)
 
 IGES_FILE = Path(__file__).parent.parent / "hoseline" / "data" / "mounts_thesis_appendix_a.igs"
 SWEEP_FILES = ("report.html", "view.png", "curves.png", "envelope.stl", "poses.csv", "shapes.csv", "sweep.json")
@@ -396,9 +401,57 @@ def cloud_inputs(draw) -> FuzzInput:
                      ["compare", "problem.toml", name, "-o", "OUT", "-q"])
 
 
+THESIS_WITH_CONTACT = (THESIS_TOML + """
+[contact]
+self = true
+[[contact.obstacles]]
+kind = "plane"
+point = [0.0, 0.0, -40.0]
+normal = [0.0, 0.0, 1.0]
+[[contact.obstacles]]
+kind = "box"
+center = [-90.0, 60.0, -11.25]
+size = [20.0, 20.0, 20.0]
+""").encode()
+
+
+@st.composite
+def contact_inputs(draw) -> FuzzInput:
+    """A random problem (at most 2 m, twists within two turns) with self-contact and obstacles near the middle of
+    the mounts, or the thesis problem with contact, mutated."""
+    if draw(st.booleans()):
+        return FuzzInput("contact", {"problem.toml": draw(mutated(THESIS_WITH_CONTACT))},
+                         ["solve", "problem.toml", "-o", "OUT", "-q"])
+    data = draw(feasible_problem(largest_length=2000.0, largest_segments=16))
+    data["end"]["twist"] = draw(st.floats(-720.0, 720.0))
+    length, radius = data["hose"]["length"], 0.5 * data["hose"]["outer_diameter"]
+    middle = 0.5 * (np.array(data["start"]["point"]) + np.array(data["end"]["point"]))
+    lines = [f"[contact]\nself = {'true' if draw(st.booleans()) else 'false'}\n"]
+    for _ in range(draw(st.integers(0, 3))):
+        offset = draw(st.floats(0.05, 1.0)) * length * np.array(draw(_unit_vectors()))
+        centre = middle + offset
+        size = draw(st.floats(0.02, 0.5)) * length + radius
+        kind = draw(st.sampled_from(("plane", "sphere", "cylinder", "box")))
+        numbers = lambda v: "[" + ", ".join(repr(float(x)) for x in v) + "]"  # noqa: E731
+        table = f"[[contact.obstacles]]\nkind = \"{kind}\"\n"
+        if kind == "plane":  # the hose's side: the normal points from the plane towards the mounts' middle
+            table += f"point = {numbers(centre)}\nnormal = {numbers(-offset)}\n"
+        elif kind == "sphere":
+            table += f"center = {numbers(centre)}\nradius = {size!r}\n"
+        elif kind == "cylinder":
+            axis = np.array(draw(_unit_vectors()))
+            table += f"start = {numbers(centre - length * axis)}\nend = {numbers(centre + length * axis)}\nradius = {size!r}\n"
+        else:
+            table += f"center = {numbers(centre)}\nsize = {numbers([size, 2.0 * size, 0.5 * size])}\n"
+        lines.append(table)
+    return FuzzInput("contact", {"problem.toml": toml_text(data, "\n".join(lines))},
+                     ["solve", "problem.toml", "-o", "OUT", "-q"])
+
+
 STRATEGIES = {
     "problem": problem_inputs, "iges": iges_inputs, "feasible": feasible_inputs, "sweep": sweep_inputs,
     "poses": pose_inputs, "mesh": mesh_inputs, "feasible_sweep": feasible_sweep_inputs, "cloud": cloud_inputs,
+    "contact": contact_inputs,
 }
 
 
@@ -510,6 +563,9 @@ def check_result_json(path: Path) -> list[str]:
     document = json.loads(path.read_text())
     hose = document["problem"]["hose"]
     problems = check_summary(document["summary"], hose["length"])
+    gap = document["summary"].get("contact", {}).get("min_gap_mm")
+    if gap is not None and not gap >= -CONTACT_TOLERANCE_MM:
+        problems.append(f"enters an obstacle or itself: smallest gap {gap} mm")
     stations = document["stations"]
     if any(v is None for name in stations for v in np.ravel(np.array(stations[name], dtype=object))):
         return problems + ["non-finite station values (null)"]

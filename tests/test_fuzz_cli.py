@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 
 # examples per kind in `make test`: the sweeps and scans cost about a second each when they succeed
 SHORT_RUN = {"problem": 30, "iges": 20, "feasible": 10, "sweep": 6, "poses": 5, "mesh": 5, "feasible_sweep": 2,
-             "cloud": 5}
+             "cloud": 5, "contact": 8}
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -31,7 +31,8 @@ def test_generated_inputs_never_break_the_command_line(kind, tmp_path_factory):
 
 
 def test_the_oracle_catches_what_it_must(tmp_path, monkeypatch):
-    """The oracle is not blind: a traceback, files left after a failure and a wrong result are each caught."""
+    """The oracle is not blind: a traceback, files left after a failure, a wrong result and a result inside an
+    obstacle are each caught."""
     from cases import THESIS_TOML
     from fuzz_cases import FuzzInput
 
@@ -68,3 +69,13 @@ def test_the_oracle_catches_what_it_must(tmp_path, monkeypatch):
         patch.setattr(results, "result_document", stretched)
         outcome = run_input(case, fresh_folder(tmp_path, "stretched"))
         assert outcome.failure == "bad_result" and "mm long" in outcome.detail and "off its mount" in outcome.detail
+
+    def entering(result):
+        data = document(result)
+        data["summary"]["contact"] = {"min_gap_mm": -0.01, "obstacles": []}  # as if the hose were 0.01 mm inside
+        return data
+
+    with monkeypatch.context() as patch:
+        patch.setattr(results, "result_document", entering)
+        outcome = run_input(case, fresh_folder(tmp_path, "entering"))
+        assert outcome.failure == "bad_result" and "enters an obstacle" in outcome.detail
