@@ -169,3 +169,22 @@ def test_a_heavy_hose_placed_with_gravity_ramped_in_snaps_down_onto_the_floor_an
     np.testing.assert_allclose(result.start_force + result.end_force + floor.total_force, [0.0, 0.0, weight],
                                atol=1e-6 * weight)
     assert 0.0 < floor.total_force[2] < weight
+
+
+def test_a_path_that_keeps_snapping_fails_saying_so(monkeypatch):
+    """A contact path that snaps more than MOST_SNAPS times fails with a message that says so (the fuzzing campaign
+    found a coarse hose coiling on itself that crept on by hundreds of snaps for minutes); here the limit is set to
+    one below the plectoneme's snaps."""
+    import hoseline.procedures.contact.continuation as continuation
+    from hoseline.procedures.placement.continuation import PlacementError
+
+    problem = problem_from_dict({"hose": {"length": 200.0, "outer_diameter": 4.0, "bending_stiffness": 1e5,
+                                          "torsional_stiffness": 8e4, "segments": 40},
+                                 "start": {"point": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0]},
+                                 "end": {"point": [100.0, 0.0, 0.0], "direction": [-1.0, 0.0, 0.0], "twist": 720.0},
+                                 "contact": {"self": True}})
+    snaps = sum("snaps downhill" in event for event in solve(problem, estimate_error=False).events)
+    assert snaps >= 1
+    monkeypatch.setattr(continuation, "MOST_SNAPS", snaps - 1)
+    with pytest.raises(PlacementError, match=f"snapped more than {snaps - 1} times"):
+        solve(problem, estimate_error=False)

@@ -109,7 +109,7 @@ class MeshArrays:
     +1 if the triangle takes it, else -1 (the sign of s ((q - p) x w) . m, TIE_DIRECTIONS).
     triangle_tree: (lower (M, 3), upper (M, 3), children (M, 2), ranges (M, 2)) of every mesh's tree,
     node and item indices global.  triangle_roots (K,): the root node of each mesh's tree (-1: the mesh left out
-of the searches, contact_motion.only).
+    of the searches, contact_motion.only).
     triangle_mesh (F,): the mesh of each triangle.  edges (E, 2, 3), edge_tree, edge_roots, edge_mesh:
     the same for the kept edges (-1 as root: a mesh without kept edges).  corners (E, 2): CORNER, JOINT or
     COVERED for each end of an edge (_edge_corners): a segment pairs with an edge at a corner, but where the

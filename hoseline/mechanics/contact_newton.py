@@ -330,7 +330,7 @@ class StepFilter:
         # and the bend; a station or segment-edge pair whose gap cannot shrink to SAFE_FRACTION of it by that much
         # is clear whatever the path (as `watched` for the analytic pairs), and is not checked
         moves = np.linalg.norm(nodes - start, axis=1) + bend
-        near = (1.0 - SAFE_FRACTION) * gaps < moves  # False where the gap is inf (out of reach)
+        near = (1.0 - SAFE_FRACTION) * gaps <= moves  # False where the gap is inf (out of reach)
         if np.any(near):
             needed = SAFE_FRACTION * gaps[near] + bend[near]  # a chord farther than this is clear: no need to know more
             chord_gaps = np.min(model.mesh.segment_gaps(start[near], nodes[near], model.hose_radius,
@@ -339,7 +339,8 @@ class StepFilter:
                 return False
         segment_moves = np.maximum(moves[:-1], moves[1:])
         kinds, segments, edges, edge_gaps = model.mesh.pairs(start, model.hose_radius,
-                                                             (np.zeros(start.shape[0]), segment_moves / (1.0 - SAFE_FRACTION)),
+                                                             (np.zeros(start.shape[0]),
+                                                              (1.0 + 1e-9) * segment_moves / (1.0 - SAFE_FRACTION)),
                                                              every_feature=True)
         on_edges = kinds == SEGMENT_EDGE
         segments, edges, edge_gaps = segments[on_edges], edges[on_edges], edge_gaps[on_edges]

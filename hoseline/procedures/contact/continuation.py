@@ -35,6 +35,8 @@ POLISHED_TOLERANCE = 1e-12  # what the end of a path is polished to, if two iter
 POLISH_ITERATIONS = 2
 STEP_HALVINGS = 10  # of a Newton step within a continuation step: a step that needs more is halved instead
 LAST_STEP_HALVINGS = 30  # for the smallest step, before the branch is judged to end in a fold
+MOST_SNAPS = 100  # of one path: a path that keeps snapping is not being followed (a coarse hose coiling on itself
+# crept on by hundreds of tiny snaps for minutes in the fuzzing campaign): it fails, saying so
 SMALLEST_MOVE = 1e-9  # of the path: the shortest step the move check of moving obstacles halves down to (an obstacle
 # pushing the hose may move less than the gap, d_hat / 2 or less, per step until there is a prediction)
 
@@ -61,13 +63,13 @@ def follow_contact(
     neither is admitted the step is halved.  log: if given, its iteration and step counters grow and
     every snap (loss of stability or fold) is recorded in log.events.  progress: optional
     callable(phase, fraction) after each step.  Raises PlacementError with the phase, the fraction and
-    Newton's message when the path cannot be followed, or when the obstacles cannot move on without
-    passing through the hose (no admitted step longer than SMALLEST_MOVE).
+    Newton's message when the path cannot be followed, when it snaps more than MOST_SNAPS times, or when
+    the obstacles cannot move on without passing through the hose (no admitted step longer than SMALLEST_MOVE).
     """
     moving = model if isinstance(model, ObstaclePath) else None
     clamps_now, placed = path(start), moving.at(start) if moving is not None else None
     previous = None if before is None else (start - 1.0, before)  # for the secant prediction
-    t, dt, iterations = start, min(control.first, 1.0 - start), 0
+    t, dt, iterations, snaps = start, min(control.first, 1.0 - start), 0, 0
     while t < 1.0 - 1e-14:
         t_next = min(1.0, t + dt)
         clamps = path(t_next)
@@ -104,6 +106,14 @@ def follow_contact(
         else:
             start_from = None
         if start_from is not None:
+            snaps += 1
+            if snaps > MOST_SNAPS:
+                h = props.segment_length
+                raise PlacementError(
+                    f"placement phase '{phase}' with contact failed at fraction {t_next:.4f}: the hose snapped more than "
+                    f"{MOST_SNAPS} times on the way (it keeps meeting folds: a hose coiling onto itself or creeping "
+                    f"along an obstacle); segments {h:.3g} mm long for a hose of outer radius {model_radius(model):.3g} mm"
+                    " may be too coarse to follow it: try more segments, less twist or obstacles further from the path")
             trial, used = _snap(phase, clamps, props, state, start_from, model_next, tolerance, t, t_next, what,
                                 report, log)
             iterations += used
@@ -127,6 +137,11 @@ def follow_contact(
     if report.converged and report.unstable_directions == 0:
         state = polished
     return state, iterations
+
+
+def model_radius(model: ContactModel | ObstaclePath) -> float:
+    """The hose's outer radius (mm) of a contact model, or of the design model of moving obstacles."""
+    return model.obstacles.design.hose_radius if isinstance(model, ObstaclePath) else model.hose_radius
 
 
 def _snap(phase: str, clamps: Clamps, props: RodProperties, before: RodState, start_from: RodState,
