@@ -140,6 +140,31 @@ def test_loads_on_a_clipped_hose_balance(placed, kind):
     assert np.linalg.norm(result.centerline[20] - CLIP_POINT) < 1e-9 * 400.0
 
 
+@pytest.mark.parametrize("kind", ["rotating", "fixed"])
+def test_a_clip_on_the_start_axis_over_a_nearly_straight_span_places_stable(kind):
+    """A clip 19 mm above the start mount on its axis, 20.1 mm of hose (3 segments) between them: the
+    span is pushed into a buckle carrying kN, and the factor of its Hessian grows by 1e11 at the
+    first segment (tests/test_bordered_inertia.py).  The pivot count used to drop the negative
+    pivots under the grown one and report -3 unstable directions, so the placement found no
+    stable state after the buckle.  The span may turn about the common axis of mount and clip at
+    no cost: the placed hose is neutral, not unstable, and the rotating clip carries no axial moment."""
+    problem = problem_from_dict({
+        "hose": {"length": 335.0, "outer_diameter": 10.0, "bending_stiffness": 1e5, "segments": 50},
+        "start": {"point": [-100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
+        "end": {"point": [100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
+        "clips": [{"type": kind, "point": [-100.0, 0.0, -61.0], "direction": [0.0, 0.0, 1.0], "arc_length": 20.1}],
+    })
+    result = solve(problem, estimate_error=False)
+    assert result.stable and result.stability_margin == 0.0  # neutral: the span turns about the axis
+    assert any("neutral stability" in event for event in result.events)
+    assert np.linalg.norm(result.centerline[3] - [-100.0, 0.0, -61.0]) < 1e-9 * 335.0
+    clip = result.clips[0]
+    assert abs(clip.moment[2]) < 1e-9 * np.linalg.norm(clip.moment)  # measured 0 (the hose stays in the x-z plane)
+    # the buckled span pushes the clip up and the mount down: 7.27 kN at 50 segments (three in the span;
+    # the clamped-clamped Euler load of 20.1 mm is 9.8 kN)
+    assert 5e3 < -clip.force[2] < 1e4 and abs(clip.force[2] + result.start_force[2]) < 2.0
+
+
 def test_bordered_inertia_matches_the_dense_reduced_hessian():
     """The unstable count of the bordered solve (neg(D) + pos(S) - m) equals the number of negative
     eigenvalues of the Hessian on the null space of the clip and end constraints."""
@@ -148,8 +173,8 @@ def test_bordered_inertia_matches_the_dense_reduced_hessian():
     for seed in range(6):
         props, clamps, state = _clipped_rod(np.random.default_rng(seed), seed % 2 == 0)
         system = evaluate(props, clamps, state)
-        lower, diag, _ = ldlt_banded(system.band, 0.0)
-        unstable = kkt_solve_bordered(lower, diag, system.jac_t, system.grad, system.constraint)[2]
+        lower, diag, negative, _ = ldlt_banded(system.band, 0.0)
+        unstable = kkt_solve_bordered(lower, diag, negative, system.jac_t, system.grad, system.constraint)[2]
         basis = scipy.linalg.null_space(system.jac_t.T)
         values = np.linalg.eigvalsh(basis.T @ dense(system.band) @ basis)
         assert unstable == int(np.sum(values < -1e-10 * np.max(np.abs(values))))

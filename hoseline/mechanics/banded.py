@@ -2,7 +2,7 @@
 
 The rod's Hessian is symmetric with half bandwidth 5; the end-position constraint adds
 a border of 3 dense rows.  We factor H = L D L^T without pivoting (cost O(n p^2)), read
-the inertia of H from the signs of D (Sylvester's law), and eliminate the border with
+the inertia of H from the signs of D (Sylvester's law, ldlt_banded), and eliminate the border with
 a 3x3 Schur complement S = J H^-1 J^T.  The inertia of the KKT matrix [[H, J^T], [J, 0]]
 is In(H) + In(-S), so the number of negative eigenvalues of the Hessian restricted to
 the constraint tangent space is  neg(H) + pos(S) - 3  (Haynsworth / Gould).
@@ -22,19 +22,24 @@ from numba import njit
 FUSED_MULTIPLY_ADD = {"contract"}
 
 
+NEUTRAL = 1e-10  # pivots and eigenvalues below this fraction of their scale count as zero
+
+
 @njit(cache=True, fastmath=FUSED_MULTIPLY_ADD)
 def ldlt_banded(band, shift):
     """Factor (H + shift*I) given in lower band storage band[i, k] = H[i, i-k].
 
-    Returns (unit_lower, diagonal, tiny) with unit_lower[i, k] = L[i, i-k] (k >= 1) and
-    tiny True when a pivot was negligible against the matrix scale; such a pivot is
-    replaced by the matrix scale, which keeps steps out of that (neutral) direction.
+    Returns (unit_lower, diagonal, negative, tiny) with unit_lower[i, k] = L[i, i-k] (k >= 1),
+    negative the number of negative eigenvalues of H + shift*I (count_negative_pivots), and tiny True
+    when a pivot was negligible against the matrix scale; such a pivot is replaced by the matrix
+    scale, which keeps steps out of that (neutral) direction.
     """
     n, width = band.shape
     p = width - 1
     lower = np.zeros_like(band)
     diag = np.empty(n)
     inv_diag = np.empty(n)
+    passed_on = np.zeros(n)  # passed_on[j]: the largest L[i, j]^2 |D[j]| taken off a later pivot
     scale = 0.0
     for i in range(n):
         scale = max(scale, abs(band[i, 0] + shift))
@@ -57,7 +62,9 @@ def ldlt_banded(band, shift):
             row[j - first] = value
             factor = value * inv_diag[j]
             lower[i, i - j] = factor
-            pivot -= value * factor
+            taken = value * factor
+            pivot -= taken
+            passed_on[j] = max(passed_on[j], abs(taken))
         diag[i] = pivot
         if abs(pivot) <= 1e-13 * scale:
             # an exactly neutral direction (a symmetry of the problem): count it as neither
@@ -65,7 +72,30 @@ def ldlt_banded(band, shift):
             tiny = True
             diag[i] = scale
         inv_diag[i] = 1.0 / diag[i]
-    return lower, diag, tiny
+    return lower, diag, count_negative_pivots(diag, passed_on, scale), tiny
+
+
+@njit(cache=True)
+def count_negative_pivots(diag, passed_on, scale):
+    """The number of negative eigenvalues of a matrix factored as L D L^T (Sylvester's law: the
+    negative pivots), with the neutral directions counted as neither.
+
+    diag: the pivots D.  passed_on: per pivot, the largest term |L[i, j]^2 D[j]| its elimination took
+    off a later pivot.  scale: the largest diagonal entry of the matrix (the unit of the pivots).
+    A pivot that is zero to rounding (below NEUTRAL x scale) is a neutral direction (a symmetry of
+    the mounts) and counts as neither, unless its elimination passed a term larger than the matrix
+    scale on to a later pivot: without pivoting, a near-zero pivot that couples to the next rows
+    is one half of an indefinite pair (a 2 x 2 block [[~0, b], [b, c]], eigenvalues about +-b) whose
+    other half comes out about -b^2 / pivot, far above the scale.  The pair holds one negative
+    eigenvalue whichever sign rounding gives the small pivot, so both signs count.  The scale is
+    the matrix's, not the largest pivot's: such a grown pivot must not make the genuinely negative
+    pivots of an ordinary size look neutral.
+    """
+    count = 0
+    for i in range(diag.size):
+        if diag[i] < -NEUTRAL * scale or (diag[i] < 0.0 and passed_on[i] > scale):
+            count += 1
+    return count
 
 
 @njit(cache=True)
@@ -100,15 +130,14 @@ def _ldlt_solve_columns(lower, diag, rhs):
     return x
 
 
-NEUTRAL = 1e-10  # pivots and eigenvalues below this fraction of the largest count as zero
-
-
 @njit(cache=True)
 def count_negative(values):
-    """How many entries are clearly negative (below -NEUTRAL times the largest magnitude).
+    """How many eigenvalues are clearly negative (below -NEUTRAL times the largest magnitude).
 
     A symmetry of the problem (e.g. mounts on one axis, free to turn about it) gives an
     exactly zero eigenvalue; rounding must not turn that neutral direction into an unstable one.
+    For eigenvalues only: the pivots of an LDL^T can grow far above the matrix scale (ldlt_banded
+    counts its own).
     """
     largest = 0.0
     for v in values:
@@ -170,10 +199,11 @@ def solve_3x3(m, rhs):
 
 
 @njit(cache=True, fastmath=FUSED_MULTIPLY_ADD)
-def kkt_solve(lower, diag, jac_t, grad, constraint):
+def kkt_solve(lower, diag, negative, jac_t, grad, constraint):
     """Newton step of the bordered system  [[H, J^T], [J, 0]] [p; -mu] = [-grad; -constraint].
 
-    lower, diag: LDL^T factor of H.  jac_t: (n, 3) = J^T.  grad: (n,).  constraint: (3,).
+    lower, diag, negative: LDL^T factor of H and its negative eigenvalues (ldlt_banded).
+    jac_t: (n, 3) = J^T.  grad: (n,).  constraint: (3,).
     Returns (step, mu, unstable_directions) where mu solves H p - J^T mu = -grad, J p = -constraint,
     and unstable_directions is the number of negative eigenvalues of H on the tangent space
     of the constraint.
@@ -217,7 +247,7 @@ def kkt_solve(lower, diag, jac_t, grad, constraint):
         for k in range(min(p, n - 1 - i), 0, -1):
             value -= lower[i + k, k] * step[i + k]
         step[i] = value
-    unstable = count_negative(diag) + symmetric_3x3_positive_count(schur) - 3
+    unstable = negative + symmetric_3x3_positive_count(schur) - 3
     return step, mu, unstable
 
 

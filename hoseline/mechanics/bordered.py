@@ -4,7 +4,7 @@ For the rod with clips (mechanics/clipped.py) the border has m = 3 + 3c rows: th
 and each clip's position.  Same method as banded.kkt_solve: with Y = L^-1 [J^T, grad] (one
 forward sweep), S = J H^-1 J^T = Y_J^T D^-1 Y_J (m x m, dense), J H^-1 grad = Y_J^T D^-1 y_g,
 and one backward sweep for the step.  The number of negative eigenvalues of H on the tangent
-space {J v = 0} is neg(D) + pos(S) - m (Haynsworth / Gould), with the same neutral threshold.
+space {J v = 0} is neg(H) + pos(S) - m (Haynsworth / Gould), neg(H) counted by banded.ldlt_banded.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.banded import NEUTRAL, count_negative
+from hoseline.mechanics.banded import NEUTRAL
 
 
 @njit(cache=True)
@@ -28,10 +28,11 @@ def positive_count(symmetric):
 
 
 @njit(cache=True)
-def kkt_solve_bordered(lower, diag, jac_t, grad, constraint):
+def kkt_solve_bordered(lower, diag, negative, jac_t, grad, constraint):
     """Newton step of [[H, J^T], [J, 0]] [p; -mu] = [-grad; -constraint] for a border of m rows.
 
-    lower, diag: LDL^T factor of H (banded.ldlt_banded).  jac_t: (n, m) = J^T.  grad: (n,).
+    lower, diag, negative: LDL^T factor of H and its negative eigenvalues (banded.ldlt_banded).
+    jac_t: (n, m) = J^T.  grad: (n,).
     constraint: (m,).  Returns (step (n,), mu (m,), unstable directions on the tangent space).
     """
     n, width = lower.shape
@@ -67,5 +68,5 @@ def kkt_solve_bordered(lower, diag, jac_t, grad, constraint):
         for k in range(min(p, n - 1 - i), 0, -1):
             value -= lower[i + k, k] * step[i + k]
         step[i] = value
-    unstable = count_negative(diag) + positive_count(schur) - m
+    unstable = negative + positive_count(schur) - m
     return step, mu, unstable

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hoseline.mechanics.banded import banded_matvec, count_negative, ldlt_banded, ldlt_solve
+from hoseline.mechanics.banded import banded_matvec, ldlt_banded, ldlt_solve
 from hoseline.mechanics.bordered import kkt_solve_bordered, positive_count
 from hoseline.mechanics.clipped import clip_moments, clipped_system, stretch_terms, unknown_layout
 from hoseline.mechanics.newton import NewtonReport, RodProperties, System, _residual, _roll_frame
@@ -200,9 +200,9 @@ def apply_step(props: RodProperties, clamps: Clamps, state: RodState, step: np.n
 def _step(system: System, shift: float, arc_shift: float = 0.0):
     """(step, force step, unstable directions) of the bordered Newton system, H shifted by `shift`
     (and the arc-length block by `arc_shift`, for sliding clips; see the module doc)."""
-    lower, diag, _ = ldlt_banded(system.band, shift)
+    lower, diag, negative, _ = ldlt_banded(system.band, shift)
     if not isinstance(system, SlidingSystem):
-        return kkt_solve_bordered(lower, diag, system.jac_t, system.grad, system.constraint)
+        return kkt_solve_bordered(lower, diag, negative, system.jac_t, system.grad, system.constraint)
     m, s = system.jac_t.shape[1], system.mixed.shape[1]
     border = np.hstack([system.jac_t, system.mixed])
     solved = ldlt_solve(lower, diag, np.hstack([border, system.grad[:, None]]))
@@ -214,7 +214,7 @@ def _step(system: System, shift: float, arc_shift: float = 0.0):
     rhs = border.T @ solved[:, -1] - np.concatenate([system.constraint, system.stretch_grad])
     mu = np.linalg.solve(schur, rhs)
     step = np.concatenate([solved[:, :-1] @ mu - solved[:, -1], -mu[m:]])
-    return step, mu[:m], int(count_negative(diag) + positive_count(schur) - m)
+    return step, mu[:m], int(negative + positive_count(schur) - m)
 
 
 def _quadratic(system: System, step: np.ndarray) -> float:

@@ -316,7 +316,7 @@ def banded_step(band, jac_t, columns, signs, grad, constraint):
     a first solve already within ACCURATE, a few hundred eps, is kept as it is).
     The Schur complement (m + r square) is factored by LAPACK's sytrf, which gives its inertia.
     """
-    lower, diag, tiny = ldlt_banded(band, 0.0)
+    lower, diag, negative, tiny = ldlt_banded(band, 0.0)
     if tiny:
         return None
     forward, schur = schur_complement(lower, diag, jac_t, columns, signs)
@@ -339,7 +339,7 @@ def banded_step(band, jac_t, columns, signs, grad, constraint):
     mu = -nu[:m]
     if not (error <= BACKWARD_ERROR and np.all(np.isfinite(step)) and np.all(np.isfinite(mu))):
         return None
-    unstable = count_negative(diag) + negative_pivots(factor, pivots) - int(np.sum(signs > 0.0)) - m
+    unstable = negative + negative_pivots(factor, pivots) - int(np.sum(signs > 0.0)) - m
     return step, mu, int(unstable)
 
 

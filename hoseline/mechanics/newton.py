@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.banded import banded_matvec, count_negative, kkt_solve, ldlt_banded, ldlt_solve
+from hoseline.mechanics.banded import banded_matvec, kkt_solve, ldlt_banded, ldlt_solve
 from hoseline.mechanics.energy import BANDWIDTH, assemble
 from hoseline.mechanics.rod import Clamps, RodState, centerline, constraint_jacobian_t, segment_loads
 from hoseline.mechanics.rotations import rotate_frames, rotation_matrix
@@ -161,12 +161,12 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
 
 @njit(cache=True)
 def _step_kernel(band, jac_t, grad, constraint, shift, constrained):
-    lower, diag, tiny = ldlt_banded(band, shift)
+    lower, diag, negative, tiny = ldlt_banded(band, shift)
     if constrained:
-        step, force_step, unstable = kkt_solve(lower, diag, jac_t, grad, constraint)
+        step, force_step, unstable = kkt_solve(lower, diag, negative, jac_t, grad, constraint)
         return step, force_step, unstable, tiny
     step = -ldlt_solve(lower, diag, grad)
-    return step, np.zeros(3), count_negative(diag), tiny
+    return step, np.zeros(3), negative, tiny
 
 
 def total_energy(props: RodProperties, clamps: Clamps, state: RodState) -> float:

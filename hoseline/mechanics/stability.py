@@ -35,9 +35,9 @@ def smallest_eigenpairs(band: np.ndarray, jac_t: np.ndarray, count: int = 1, tol
     about its square).
     """
     n, m = jac_t.shape
-    lower, diag, tiny = ldlt_banded(band, 0.0)
+    lower, diag, negative_in_h, tiny = ldlt_banded(band, 0.0)
     solve = kkt_solve if m == 3 else kkt_solve_bordered  # a border of 3 + 3c rows with clips
-    negative = int(solve(lower, diag, jac_t, np.zeros(n), np.zeros(m))[2])
+    negative = int(solve(lower, diag, negative_in_h, jac_t, np.zeros(n), np.zeros(m))[2])
     if tiny or n < 40:
         return _dense_pairs(band, jac_t, count)
     block = max(count, negative) + 3

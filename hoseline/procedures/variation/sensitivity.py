@@ -96,9 +96,9 @@ def step_sizes(problem: Problem) -> np.ndarray:
 def _tangent(system, dgrad: np.ndarray, dconstraint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(dx/dp, dmu/dp) from the bordered system of `system` (exact Hessian) and the parameter derivatives
     (three border rows for the end; three more per clip)."""
-    lower, diag, _ = ldlt_banded(system.band, 0.0)
+    lower, diag, negative, _ = ldlt_banded(system.band, 0.0)
     solve = kkt_solve if system.jac_t.shape[1] == 3 else kkt_solve_bordered
-    step, mu, _ = solve(lower, diag, system.jac_t, dgrad, dconstraint)
+    step, mu, _ = solve(lower, diag, negative, system.jac_t, dgrad, dconstraint)
     return step, mu
 
 
