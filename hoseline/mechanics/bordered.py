@@ -4,7 +4,8 @@ For the rod with clips (mechanics/clipped.py) the border has m = 3 + 3c rows: th
 and each clip's position.  Same method as banded.kkt_solve: with Y = L^-1 [J^T, grad] (one
 forward sweep), S = J H^-1 J^T = Y_J^T D^-1 Y_J (m x m, dense), J H^-1 grad = Y_J^T D^-1 y_g,
 and one backward sweep for the step.  The number of negative eigenvalues of H on the tangent
-space {J v = 0} is neg(H) + pos(S) - m (Haynsworth / Gould), neg(H) counted by banded.ldlt_banded.
+space {J v = 0} is neg(H) + pos(S) - r (Haynsworth / Gould), r the number of independent rows
+(tangent_space_inertia).
 """
 
 from __future__ import annotations
@@ -25,6 +26,30 @@ def positive_count(symmetric):
         if v > NEUTRAL * largest:
             count += 1
     return count
+
+
+@njit(cache=True)
+def tangent_space_inertia(schur, jac_t):
+    """(pos, r): the positive eigenvalues of S = J H^-1 J^T on the border's independent rows, and
+    how many independent rows there are, so that H has neg(H) + pos - r negative eigenvalues on the
+    tangent space {J v = 0}.
+
+    schur: S (m, m), mm/N.  jac_t: (n, m) = J^T, mm/rad.
+    Independent rows: the border's Gram matrix J J^T = U diag(g) U^T; a row combination with g
+    below NEUTRAL x the largest (|J^T y| below 1e-5 of the longest) is a dependent constraint (a
+    span between held stations pulled straight: the row along it vanishes) and is dropped, so the
+    count is on the tangent space of the r independent constraints.  On those rows, in the basis
+    W = U_r diag(g_r)^-1/2 in which they are orthonormal, W^T S W has the inertia of S (Sylvester)
+    but eigenvalues that no longer scale with the lengths of the row combinations: one near zero
+    there is a neutral direction of H, not a short combination of rows (a nearly straight span).
+    """
+    m = schur.shape[0]
+    gram_values, gram_vectors = np.linalg.eigh(jac_t.T @ jac_t)  # ascending
+    dependent = 0
+    while dependent < m and gram_values[dependent] <= NEUTRAL * gram_values[m - 1]:
+        dependent += 1
+    basis = gram_vectors[:, dependent:] / np.sqrt(gram_values[dependent:])
+    return positive_count(basis.T @ schur @ basis), m - dependent
 
 
 @njit(cache=True)
@@ -68,5 +93,6 @@ def kkt_solve_bordered(lower, diag, negative, jac_t, grad, constraint):
         for k in range(min(p, n - 1 - i), 0, -1):
             value -= lower[i + k, k] * step[i + k]
         step[i] = value
-    unstable = negative + positive_count(schur) - m
+    positive, independent = tangent_space_inertia(schur, jac_t)
+    unstable = negative + positive - independent
     return step, mu, unstable
