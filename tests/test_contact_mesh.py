@@ -343,6 +343,37 @@ def test_pairs_found_through_the_tree_are_those_of_all_triangles():
 
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_one_walk_down_both_trees_finds_the_leaves_of_a_walk_per_segment(seed):
+    from hoseline.mechanics.bounding_volumes import LEAF_SIZE, box_gap, build_tree, chain_tree, leaves_within
+
+    rng = np.random.default_rng(seed)
+    corners = rng.uniform(-50.0, 50.0, (3000, 1, 3)) + rng.normal(scale=2.0, size=(3000, 3, 3))
+    order, lower, upper, children, ranges = build_tree(corners.min(axis=1), corners.max(axis=1), corners.mean(axis=1),
+                                                       LEAF_SIZE)
+    count = int(rng.integers(1, 60))  # any chain length, not only powers of two
+    starts = np.cumsum(rng.normal(scale=4.0, size=(count, 3)), axis=0)
+    ends = starts + rng.normal(scale=3.0, size=(count, 3)) * (seed != 0)  # seed 0: stations (points)
+    reaches = rng.uniform(-2.0, 8.0, count)  # none within a negative reach
+    segments, leaves = leaves_within(starts, ends, reaches, chain_tree(starts, ends, reaches), lower, upper, children,
+                                     ranges, 0)
+    found = sorted(zip(segments.tolist(), leaves.tolist()))
+    every_leaf = np.flatnonzero(children[:, 0] < 0)
+    expected = sorted((i, int(leaf)) for i in range(count) for leaf in every_leaf
+                      if box_gap(starts[i], ends[i], lower[leaf], upper[leaf]) < reaches[i])
+    assert len(expected) > 10 and found == expected
+
+
+def test_mesh_pairs_come_in_the_order_of_their_stations_and_segments():
+    rng = np.random.default_rng(5)
+    vertices, faces = _faceted_drum(24, rows=6)
+    mesh = pack_meshes([(vertices, faces), (vertices + [0.0, 0.0, 30.0], faces)], [0, 1])
+    nodes = np.cumsum(np.vstack([[[-60.0, -30.0, 38.0]], 6.0 * rng.standard_normal((30, 3)) + [4.0, 2.0, 0.0]]), axis=0)
+    kinds, first, second, _ = mesh.pairs(nodes, 2.0, 6.0)
+    for kind in (STATION_TRIANGLE, SEGMENT_EDGE):
+        assert np.all(np.diff(first[kinds == kind]) >= 0) and np.any(kinds == kind)
+
+
 def test_the_smallest_gap_to_a_mesh_is_that_of_the_nearest_triangle_of_every_segment():
     """MeshArrays.smallest_gaps (a bound grown until a segment is below it) against segment_gaps with no bound (the
     nearest triangle of every segment), for a hose touching the drum, near it, and far from it; and per-segment bounds

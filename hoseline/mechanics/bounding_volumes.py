@@ -88,6 +88,78 @@ def refit_boxes(items, lower, upper, children, ranges, first, end):
                     upper[node, k] = max(upper[node, k], items[position, corner, k])
 
 
+@njit(cache=True)
+def chain_tree(starts, ends, reaches):
+    """The boxes of a binary tree over a chain of n segments (the hose's stations or segments), for leaves_within.
+
+    starts, ends: (n, 3) mm, segment i from starts[i] to ends[i] (a station: both the same).  reaches: (n,) mm,
+    each segment's box grown by its reach (none at or below 0: an empty box, nothing is within).  The tree is
+    implicit over the chain's order (neighbours along a hose lie close together, so no sorting is needed): node
+    j has the children 2j and 2j + 1, leaf i is node size + i, size the power of two at or above n.
+    Returns (lower (2 size, 3), upper (2 size, 3), size).
+    """
+    n = starts.shape[0]
+    size = 1
+    while size < n:
+        size *= 2
+    lower = np.full((2 * size, 3), np.inf)
+    upper = np.full((2 * size, 3), -np.inf)
+    for i in range(n):
+        if reaches[i] > 0.0:
+            for k in range(3):
+                lower[size + i, k] = min(starts[i, k], ends[i, k]) - reaches[i]
+                upper[size + i, k] = max(starts[i, k], ends[i, k]) + reaches[i]
+    for j in range(size - 1, 0, -1):
+        for k in range(3):
+            lower[j, k] = min(lower[2 * j, k], lower[2 * j + 1, k])
+            upper[j, k] = max(upper[2 * j, k], upper[2 * j + 1, k])
+    return lower, upper, size
+
+
+@njit(cache=True)
+def leaves_within(starts, ends, reaches, chain, lower, upper, children, ranges, root):
+    """Every (segment, leaf) pair of a chain of segments (chain_tree) and a tree's leaves below `root` whose leaf box
+    comes within the segment's reach (box_gap < reach; a box holding that leaf is then within it too), found by
+    one walk down both trees at once instead of one walk from the root per segment.
+
+    Returns (segments, leaves): the segment index and the leaf node of each pair, in no particular order.
+    """
+    chain_lower, chain_upper, size = chain
+    segments, leaves = [0 for _ in range(0)], [0 for _ in range(0)]
+    stack = np.empty((2 * STACK_SIZE, 2), np.int64)  # depth of both trees at most, two pushed per level
+    stack[0, 0], stack[0, 1] = root, 1
+    top = 1
+    while top > 0:
+        top -= 1
+        node, link = stack[top, 0], stack[top, 1]
+        apart = False
+        for k in range(3):
+            if lower[node, k] > chain_upper[link, k] or upper[node, k] < chain_lower[link, k]:
+                apart = True
+        if apart:
+            continue
+        on_leaf, on_chain_leaf = children[node, 0] < 0, link >= size
+        if on_leaf and on_chain_leaf:
+            i = link - size
+            if box_gap(point_of(starts, i), point_of(ends, i), lower[node], upper[node]) < reaches[i]:
+                segments.append(i)
+                leaves.append(node)
+            continue
+        # open the larger box (by the sum of its sides), or the one that is not a leaf
+        node_size, link_size = 0.0, 0.0
+        for k in range(3):
+            node_size += upper[node, k] - lower[node, k]
+            link_size += chain_upper[link, k] - chain_lower[link, k]
+        if on_chain_leaf or (not on_leaf and node_size >= link_size):
+            stack[top, 0], stack[top, 1] = children[node, 0], link
+            stack[top + 1, 0], stack[top + 1, 1] = children[node, 1], link
+        else:
+            stack[top, 0], stack[top, 1] = node, 2 * link
+            stack[top + 1, 0], stack[top + 1, 1] = node, 2 * link + 1
+        top += 2
+    return np.array(segments, dtype=np.int64), np.array(leaves, dtype=np.int64)
+
+
 @njit(cache=True, inline="always")
 def point_of(points, i):
     """Row i of an (n, 3) array as a tuple."""
@@ -158,27 +230,3 @@ def segment_search(p, q, bound, triangles, normals, lower, upper, children, rang
             stack[top], stack[top + 1] = left, right
         top += 2
     return best, best_position, on_segment, on_triangle
-
-
-@njit(cache=True)
-def items_within(p, q, reach, lower, upper, children, ranges, root, stack):
-    """Positions (in tree order) of the items in the leaves, below node `root`, whose boxes come within `reach` mm of segment pq.
-
-    A superset of the items within reach (a box is nearer than what it holds); the caller measures them.
-    stack: scratch space of STACK_SIZE ints.
-    """
-    found = [0 for _ in range(0)]
-    stack[0] = root
-    top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        if box_gap(p, q, lower[node], upper[node]) >= reach:
-            continue
-        if children[node, 0] < 0:
-            for position in range(ranges[node, 0], ranges[node, 0] + ranges[node, 1]):
-                found.append(position)
-            continue
-        stack[top], stack[top + 1] = children[node, 0], children[node, 1]
-        top += 2
-    return found

@@ -68,7 +68,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.bounding_volumes import LEAF_SIZE, STACK_SIZE, build_tree, items_within, point_of, segment_search
+from hoseline.mechanics.bounding_volumes import (
+    LEAF_SIZE,
+    STACK_SIZE,
+    build_tree,
+    chain_tree,
+    leaves_within,
+    point_of,
+    segment_search,
+)
 from hoseline.mechanics.contact import (
     EDGE_AB,
     EDGE_AC,
@@ -339,50 +347,67 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
     Returns (kinds, first (station or segment), second (triangle or edge), gaps) as contact.pair_gaps.
     """
     kinds, first, second, gaps = [0 for _ in range(0)], [0 for _ in range(0)], [0 for _ in range(0)], [0.0 for _ in range(0)]
-    stack = np.empty(STACK_SIZE, np.int64)
-    for k in range(1, nodes.shape[0]):
-        x = point_of(nodes, k)
+    stations = nodes[1:]
+    found, leaves = _leaves_in_order(stations, stations, station_cutoffs[1:] + hose_radius, t_lower, t_upper,
+                                     t_children, t_ranges, t_roots)
+    for pair in range(found.shape[0]):
+        k, leaf = found[pair] + 1, leaves[pair]
         cutoff = station_cutoffs[k]
-        reach = cutoff + hose_radius
-        for root in t_roots:
-            if root < 0:
+        for position in range(t_ranges[leaf, 0], t_ranges[leaf, 0] + t_ranges[leaf, 1]):
+            a, b, c = triangles[position, 0], triangles[position, 1], triangles[position, 2]
+            u, v, feature = triangle_parameters(nodes[k], a, b, c)
+            distance = 0.0
+            for j in range(3):
+                distance += (nodes[k, j] - ((1.0 - u - v) * a[j] + u * b[j] + v * c[j])) ** 2
+            gap = np.sqrt(distance) - hose_radius
+            if not gap < cutoff:
                 continue
-            for position in items_within(x, x, reach, t_lower, t_upper, t_children, t_ranges, root, stack):
-                a, b, c = triangles[position, 0], triangles[position, 1], triangles[position, 2]
-                u, v, feature = triangle_parameters(nodes[k], a, b, c)
-                distance = 0.0
-                for j in range(3):
-                    distance += (nodes[k, j] - ((1.0 - u - v) * a[j] + u * b[j] + v * c[j])) ** 2
-                distance = np.sqrt(distance)
-                if not every_feature and (feature == FACE or not (features[position] >> feature) & 1):
-                    if not _takes(nodes[k], flat_edges[position], flat_sides[position]):
-                        continue  # over a neighbour in its plane, or on the flat edge or vertex it gives to another
-                gap = distance - hose_radius
-                if gap < cutoff:
-                    kinds.append(STATION_TRIANGLE)
-                    first.append(k)
-                    second.append(position)
-                    gaps.append(gap)
-    for i in range(nodes.shape[0] - 1):
-        p, q = point_of(nodes, i), point_of(nodes, i + 1)
+            if not every_feature and (feature == FACE or not (features[position] >> feature) & 1):
+                if not _takes(nodes[k], flat_edges[position], flat_sides[position]):
+                    continue  # over a neighbour in its plane, or on the flat edge or vertex it gives to another
+            kinds.append(STATION_TRIANGLE)
+            first.append(k)
+            second.append(position)
+            gaps.append(gap)
+    found, leaves = _leaves_in_order(nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, e_lower, e_upper, e_children,
+                                     e_ranges, e_roots)
+    for pair in range(found.shape[0]):
+        i, leaf = found[pair], leaves[pair]
         cutoff = segment_cutoffs[i]
-        reach = cutoff + hose_radius
-        for root in e_roots:
-            if root < 0:
+        for position in range(e_ranges[leaf, 0], e_ranges[leaf, 0] + e_ranges[leaf, 1]):
+            a, b = edges[position, 0], edges[position, 1]
+            gap = segment_closest(nodes[i], nodes[i + 1], a, b)[0] - hose_radius
+            if not gap < cutoff:
                 continue
-            for position in items_within(p, q, reach, e_lower, e_upper, e_children, e_ranges, root, stack):
-                a, b = edges[position, 0], edges[position, 1]
-                distance = segment_closest(nodes[i], nodes[i + 1], a, b)[0]
-                if not every_feature and not _edge_takes(nodes[i], nodes[i + 1], corners[position], joints[position]):
-                    continue  # beyond a straight joint, where the edge that continues this one takes the segment
-                gap = distance - hose_radius
-                if gap < cutoff:
-                    kinds.append(SEGMENT_EDGE)
-                    first.append(i)
-                    second.append(position)
-                    gaps.append(gap)
+            if not every_feature and not _edge_takes(nodes[i], nodes[i + 1], corners[position], joints[position]):
+                continue  # beyond a straight joint, where the edge that continues this one takes the segment
+            kinds.append(SEGMENT_EDGE)
+            first.append(i)
+            second.append(position)
+            gaps.append(gap)
     return (np.array(kinds, dtype=np.int64), np.array(first, dtype=np.int64), np.array(second, dtype=np.int64),
             np.array(gaps, dtype=np.float64))
+
+
+@njit(cache=True)
+def _leaves_in_order(starts, ends, reaches, lower, upper, children, ranges, roots):
+    """(segments, leaves): every leaf of every mesh's tree (roots; -1: left out) within the reach (mm) of a segment
+    of the chain starts[i] to ends[i] (bounding_volumes.leaves_within), ordered by segment, then mesh, then as
+    one walk per segment from the root meets them (the right child first: leaf ranges descending), so that the
+    pairs come in the order of a search per segment, and the sums over them round alike."""
+    chain = chain_tree(starts, ends, reaches)
+    segment, leaf, mesh = [0 for _ in range(0)], [0 for _ in range(0)], [0 for _ in range(0)]
+    for m in range(roots.shape[0]):
+        if roots[m] >= 0:
+            found, at = leaves_within(starts, ends, reaches, chain, lower, upper, children, ranges, roots[m])
+            for pair in range(found.shape[0]):
+                segment.append(found[pair])
+                leaf.append(at[pair])
+                mesh.append(m)
+    segment, leaf, mesh = np.array(segment, np.int64), np.array(leaf, np.int64), np.array(mesh, np.int64)
+    last = ranges[leaf, 0].max() + 1 if leaf.shape[0] else 1
+    order = np.argsort((segment * roots.shape[0] + mesh) * last + (last - 1 - ranges[leaf, 0]), kind="mergesort")
+    return segment[order], leaf[order]
 
 
 @njit(cache=True)

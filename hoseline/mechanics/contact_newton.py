@@ -339,7 +339,7 @@ class StepFilter:
                 return False
         segment_moves = np.maximum(moves[:-1], moves[1:])
         kinds, segments, edges, edge_gaps = model.mesh.pairs(start, model.hose_radius,
-                                                             (np.zeros(start.shape[0]),
+                                                             (np.full(start.shape[0], -np.inf),  # no stations
                                                               (1.0 + 1e-9) * segment_moves / (1.0 - SAFE_FRACTION)),
                                                              every_feature=True)
         on_edges = kinds == SEGMENT_EDGE
@@ -403,6 +403,7 @@ def solve_with_contact(
     tolerance: float = 1e-10,
     max_iterations: int = 60,
     max_halvings: int = 30,
+    start_is_clear: bool = False,
 ) -> tuple[RodState, NewtonReport]:
     """Newton iterations from `state` (which must not penetrate) to an equilibrium with contact.
 
@@ -410,18 +411,23 @@ def solve_with_contact(
     meaningful when report.converged.  tolerance: relative residual of force and moment balance.
     max_halvings: of a step before the iteration gives up ("no acceptable step found"); a
     continuation gives up sooner and halves its own step instead.
+    start_is_clear: the caller has shown that `state` clears everything (the move check of
+    procedures/contact/moving.py admitted it), so it is not searched for penetration again (on a
+    fine mesh that search costs as much as an iteration's pairs).
     Unstable directions counted by the KKT pivots at the converged state are confirmed by the dense
     reduced Hessian (_lowest_mode): an eigenvalue above -NEUTRAL times the largest is zero (neutral).
     One BLAS thread: the dense systems are small, and threads only contend for the cores (10x
     slower on a loaded two-core machine).
     """
     with one_blas_thread():
-        return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings)
+        return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings,
+                                   start_is_clear)
 
 
-def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings):
+def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings, start_is_clear):
     """solve_with_contact without the thread limit."""
-    inside = model.penetration(centerline(state.frames, clamps.start_point, props.segment_length))
+    inside = None if start_is_clear else model.penetration(centerline(state.frames, clamps.start_point,
+                                                                      props.segment_length))
     if inside is not None:
         return state, NewtonReport(False, 0, math.inf, -1, inside)
     system = evaluate_contact(props, clamps, state, model)

@@ -91,7 +91,8 @@ def follow_contact(
         last_try = 0.5 * dt < control.smallest
         trial, report = solve_with_contact(props, clamps, begin, model_next, tolerance=tolerance,
                                            max_iterations=STEP_ITERATIONS,
-                                           max_halvings=LAST_STEP_HALVINGS if last_try else STEP_HALVINGS)
+                                           max_halvings=LAST_STEP_HALVINGS if last_try else STEP_HALVINGS,
+                                           start_is_clear=moving is not None)  # the move check admitted it
         iterations += report.iterations
         if log is not None:
             log.iterations += report.iterations

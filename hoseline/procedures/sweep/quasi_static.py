@@ -144,7 +144,8 @@ class _Tracker:
                                          guesses)
             trial, report = self.state, NewtonReport(False, 0, math.inf, -1, "no start the move check admits")
             if begin is not None:
-                trial, report = solve_with_contact(self.props, clamps, begin, placed.model, tolerance=CONTACT_TOLERANCE)
+                trial, report = solve_with_contact(self.props, clamps, begin, placed.model, tolerance=CONTACT_TOLERANCE,
+                                                   start_is_clear=True)
         iterations = report.iterations
         events: list[str] = []
         jump = _largest_movement(old_nodes, stations(self.props, clamps, trial)) if report.converged else math.inf
