@@ -91,3 +91,31 @@ def test_pivot_count_is_that_of_the_dense_eigenvalues_when_the_factor_grows():
         grown += np.max(np.abs(diag)) > 1e6 * np.max(np.abs(band[:, 0]))
         assert negative == int(np.sum(np.linalg.eigvalsh(band_to_dense(band)) < 0.0)), f"seed {seed}"
     assert grown >= 20  # the cases do grow
+
+
+@pytest.mark.parametrize("kind, dependence", [("definite", None), ("indefinite", None), ("growth", None),
+                                              ("indefinite", 1e-7)])
+def test_sliding_count_equals_the_dense_null_space_count_with_the_arc_lengths(kind, dependence):
+    """A sliding clip adds its arc length s to the unknowns, outside the band (clipped_newton._step): the count is
+    that of the Hessian in (rotations, arc lengths) on the null space of the constraint rows over both."""
+    from hoseline.mechanics.clipped_newton import SlidingSystem, _step
+
+    for seed in range(24):
+        rng = np.random.default_rng(100 + seed)
+        band = random_band(rng, kind)
+        jac_t = random_border(rng, 2, (1.0, 1e-2), dependence)
+        m, sliding = jac_t.shape[1], 1 + seed % 2
+        mixed = rng.normal(size=(UNKNOWNS, sliding))
+        stretch_hessian = rng.normal(size=(sliding, sliding))
+        stretch_hessian = stretch_hessian + stretch_hessian.T
+        stretch_jac = rng.normal(size=(m, sliding))
+        if dependence is not None:  # the nearly dependent row stays so over the arc lengths too
+            stretch_jac[-1] = 0.7 * stretch_jac[3] + 0.2 * stretch_jac[4]
+        system = SlidingSystem(0.0, np.zeros(UNKNOWNS), band, jac_t, np.zeros(m), 0.0, True, np.zeros(sliding), mixed,
+                               stretch_hessian, stretch_jac)
+        unstable = _step(system, 0.0)[2]
+        hessian = np.block([[band_to_dense(band), mixed], [mixed.T, stretch_hessian]])
+        rows = np.hstack([jac_t.T, stretch_jac])
+        basis = scipy.linalg.null_space(rows, rcond=np.sqrt(NEUTRAL))
+        values = np.linalg.eigvalsh(basis.T @ hessian @ basis)
+        assert unstable == int(np.sum(values < -NEUTRAL * np.max(np.abs(values)))), f"seed {seed}"

@@ -30,25 +30,31 @@ def positive_count(symmetric):
 
 @njit(cache=True)
 def tangent_space_inertia(schur, jac_t):
-    """(pos, r): the positive eigenvalues of S = J H^-1 J^T on the border's independent rows, and
+    """(pos, r): the positive eigenvalues of S = B^T H^-1 B - C on the border's independent rows, and
     how many independent rows there are, so that H has neg(H) + pos - r negative eigenvalues on the
     tangent space {J v = 0}.
 
-    schur: S (m, m), mm/N.  jac_t: (n, m) = J^T, mm/rad.
+    schur: S, (m, m) mm/N, or (m + s, m + s) when s unknowns that are not in the band were eliminated
+    after the m constraint rows (the sliding clips' arc lengths, clipped_newton._step).  jac_t: (n, m)
+    = J^T, mm/rad, the constraint rows over every unknown (with the s extra ones: (n + s, m)).
     Independent rows: the border's Gram matrix J J^T = U diag(g) U^T; a row combination with g
     below NEUTRAL x the largest (|J^T y| below 1e-5 of the longest) is a dependent constraint (a
     span between held stations pulled straight: the row along it vanishes) and is dropped, so the
     count is on the tangent space of the r independent constraints.  On those rows, in the basis
-    W = U_r diag(g_r)^-1/2 in which they are orthonormal, W^T S W has the inertia of S (Sylvester)
-    but eigenvalues that no longer scale with the lengths of the row combinations: one near zero
-    there is a neutral direction of H, not a short combination of rows (a nearly straight span).
+    W = U_r diag(g_r)^-1/2 in which they are orthonormal, W^T S W has the inertia of S (Sylvester;
+    the extra unknowns keep their own basis) but eigenvalues that no longer scale with the lengths
+    of the row combinations: one near zero there is a neutral direction of H, not a short
+    combination of rows (a nearly straight span).
     """
-    m = schur.shape[0]
+    m, total = jac_t.shape[1], schur.shape[0]
     gram_values, gram_vectors = np.linalg.eigh(jac_t.T @ jac_t)  # ascending
     dependent = 0
     while dependent < m and gram_values[dependent] <= NEUTRAL * gram_values[m - 1]:
         dependent += 1
-    basis = gram_vectors[:, dependent:] / np.sqrt(gram_values[dependent:])
+    basis = np.zeros((total, total - dependent))
+    basis[:m, : m - dependent] = gram_vectors[:, dependent:] / np.sqrt(gram_values[dependent:])
+    for extra in range(total - m):
+        basis[m + extra, m - dependent + extra] = 1.0
     return positive_count(basis.T @ schur @ basis), m - dependent
 
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hoseline.mechanics.banded import banded_matvec, ldlt_banded, ldlt_solve
-from hoseline.mechanics.bordered import kkt_solve_bordered, positive_count
+from hoseline.mechanics.bordered import kkt_solve_bordered, tangent_space_inertia
 from hoseline.mechanics.clipped import clip_moments, clipped_system, stretch_terms, unknown_layout
 from hoseline.mechanics.newton import NewtonReport, RodProperties, System, _residual, _roll_frame
 from hoseline.mechanics.rod import Clamps, RodState
@@ -214,7 +214,9 @@ def _step(system: System, shift: float, arc_shift: float = 0.0):
     rhs = border.T @ solved[:, -1] - np.concatenate([system.constraint, system.stretch_grad])
     mu = np.linalg.solve(schur, rhs)
     step = np.concatenate([solved[:, :-1] @ mu - solved[:, -1], -mu[m:]])
-    return step, mu[:m], int(negative + positive_count(schur) - m)
+    # the constraint rows over the band's unknowns and the arc lengths: the count is on their independent rows
+    positive, independent = tangent_space_inertia(schur, np.vstack([system.jac_t, system.stretch_jac.T]))
+    return step, mu[:m], int(negative + positive - independent)
 
 
 def _quadratic(system: System, step: np.ndarray) -> float:
