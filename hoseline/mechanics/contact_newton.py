@@ -24,7 +24,7 @@ step filter, judged by the total energy with the barrier (see its docstring); us
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.linalg
@@ -102,6 +102,10 @@ class ContactModel:
         """contact.node_terms of the pairs (kinds, first, second) with this model's obstacles; weight: kappa h, N/mm."""
         return node_terms(nodes, self.hose_radius, weight, self.activation, self.planes, self.balls, self.capsules,
                           self.mesh.triangles, self.mesh.edges, kinds, first, second)
+
+    def with_activation(self, activation: float) -> ContactModel:
+        """The same obstacles and reference pressure (kappa d_hat) with the barrier acting across `activation` mm."""
+        return replace(self, activation=activation, stiffness=self.stiffness * self.activation / activation)
 
     def owner(self, kind: int, second: int) -> str:
         """Name of the obstacle of a pair ("self" for self-contact)."""

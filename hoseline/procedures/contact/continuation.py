@@ -127,17 +127,22 @@ def follow_contact(
             progress(phase, t)
         if start_from is None and report.iterations <= control.fast_iterations:
             dt = min(control.largest, 2.0 * dt)
-    # the end of the path, polished: Newton converges quadratically, so one or two more iterations take the
-    # residual from CONTACT_TOLERANCE to rounding (the load balance then holds to its last digits); kept if stable
-    final_model = placed.model if moving is not None else model
-    polished, report = solve_with_contact(props, path(1.0), state, final_model, tolerance=POLISHED_TOLERANCE,
+    state, used = polish(props, path(1.0), state, placed.model if moving is not None else model, log)
+    return state, iterations + used
+
+
+def polish(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel,
+           log: ContinuationLog | None = None) -> tuple[RodState, int]:
+    """(state, iterations): the end of a path polished.  Newton converges quadratically, so one or two more
+    iterations take the residual from CONTACT_TOLERANCE to rounding (the load balance then holds to its last
+    digits); the polished state is kept if it converged stable, else `state`."""
+    polished, report = solve_with_contact(props, clamps, state, model, tolerance=POLISHED_TOLERANCE,
                                           max_iterations=POLISH_ITERATIONS)
-    iterations += report.iterations
     if log is not None:
         log.iterations += report.iterations
     if report.converged and report.unstable_directions == 0:
-        state = polished
-    return state, iterations
+        return polished, report.iterations
+    return state, report.iterations
 
 
 def model_radius(model: ContactModel | ObstaclePath) -> float:

@@ -18,8 +18,9 @@ only when neither in-plane side is stable.  Stability is monitored along the who
 With contact (Problem.contact, Problem.self_contact) the same sequence runs with the contact
 Newton (procedures/contact/): after the first step (taken without contact, from the straight
 hose, which must clear every obstacle, as must the buckled shape) the place and twist phases
-and the final equilibrium keep the hose out of the obstacles and itself; the result reports the
-contacts per obstacle.  The mounts' symmetry images and the error estimate are skipped then.
+and the final equilibrium keep the hose out of the obstacles and itself (each phase followed on a
+cushion, a wider barrier narrowed to the model's at its end: procedures/contact/cushion.py); the
+result reports the contacts per obstacle.  The mounts' symmetry images and the error estimate are skipped then.
 """
 
 from __future__ import annotations
@@ -54,7 +55,8 @@ from hoseline.procedures.placement.stiffening import phase_in_springs
 from hoseline.procedures.placement.stations import build_result
 from hoseline.procedures.placement.accuracy import coarse_segments, richardson_error
 from hoseline.procedures.contact import placement as contact_placement
-from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact
+from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
+from hoseline.procedures.contact.cushion import follow_on_cushion
 from hoseline.mechanics.contact_newton import solve_with_contact
 from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, symmetric_images
 
@@ -301,11 +303,12 @@ class _Sequence:
 
     def _follow(self, phase: str, path, props: RodProperties, state: RodState, log: ContinuationLog, fraction: float,
                 control: StepControl) -> RodState:
-        """follow, or follow_contact when the problem has contact."""
+        """follow, or with contact follow_on_cushion (procedures/contact/cushion.py: the contact continuation on a
+        wider barrier, narrowed to the model's at the end of the phase, before any roll is locked)."""
         if self.contact is None:
             return follow(phase, path, props, state, log, start=fraction, control=control, progress=self.progress)
-        return follow_contact(phase, path, props, state, self.contact, start=fraction, control=control, log=log,
-                              progress=self.progress)[0]
+        return follow_on_cushion(phase, path, props, state, self.contact, start=fraction, control=control, log=log,
+                                 progress=self.progress)
 
     def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState):
         """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`."""

@@ -1,0 +1,74 @@
+"""The placement path with contact followed on a cushion (procedures/contact/cushion.py): the same equilibrium as the
+path followed with the model's own barrier all along, the roll locked only after narrowing, and the fall-back."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hoseline.demos.thesis_hose import demo_problem
+from hoseline.mechanics.newton import NewtonReport
+from hoseline.model.clips import Clip
+from hoseline.model.obstacles import Cylinder
+from hoseline.procedures.contact import cushion
+from hoseline.procedures.placement.sequence import solve
+
+STRUT_RADIUS = 15.0
+
+
+@pytest.fixture(scope="module")
+def strut_case():
+    """The issue's case (bench/bench_contact_placement.py --mesh) with the strut as a cylinder: the thesis hose (100
+    segments, 180 deg), a fixed clip where the free hose passes station 50, self-contact, and a strut of radius
+    15 mm pressing 1 mm into the clipped shape at station 25: the hose slides along it for much of the place phase."""
+    plain = demo_problem(180.0, segments=100)
+    free = solve(plain, estimate_error=False)
+    h = plain.hose.segment_length
+    clipped = replace(plain, clips=(Clip("fixed", free.centerline[50], 50 * h, free.frames[49, 2] + free.frames[50, 2]),))
+    placed = solve(clipped, estimate_error=False)
+    tangent = placed.frames[24, 2] + placed.frames[25, 2]
+    side = -np.cross(tangent, placed.frames[25, 0])
+    side /= np.linalg.norm(side)
+    centre = placed.centerline[25] + side * (plain.hose.outer_radius + STRUT_RADIUS - 1.0)
+    axis = np.cross(tangent, side) / np.linalg.norm(np.cross(tangent, side))
+    strut = Cylinder(centre - 100.0 * axis, centre + 100.0 * axis, STRUT_RADIUS, "strut")
+    return replace(clipped, contact=(strut,), self_contact=True)
+
+
+@pytest.fixture(scope="module")
+def without_cushion(strut_case):
+    """The placement with the model's own barrier (0.01 mm) all along the path."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(cushion, "CUSHION_RADII", 0.0)  # no wider than d_hat: follow_contact as it is
+        return solve(strut_case, estimate_error=False)
+
+
+def test_the_cushioned_path_ends_at_the_equilibrium_of_the_path_with_the_model_s_barrier(strut_case, without_cushion):
+    on_cushion = solve(strut_case, estimate_error=False)
+    strut, = (contact for contact in on_cushion.contacts if contact.name == "strut")
+    assert strut.gap.size > 0 and 0.0 < strut.min_gap < 0.01  # it rests on the strut, within d_hat
+    np.testing.assert_allclose(on_cushion.centerline, without_cushion.centerline, rtol=0.0, atol=1e-9)
+    assert on_cushion.lock_angle_deg == pytest.approx(without_cushion.lock_angle_deg, abs=1e-9)
+    assert on_cushion.stable and on_cushion.iterations < without_cushion.iterations
+
+
+def test_a_roll_locked_on_the_cushion_is_another_problem(strut_case, without_cushion, monkeypatch):
+    # the mutation the module doc warns of: the place phase returned on the cushion, its roll locked there
+    def not_narrowed(phase, path, props, state, model, **options):
+        return cushion.follow_contact(phase, path, props, state, model.with_activation(1.0),
+                                      start=options["start"], control=options["control"], log=options["log"])[0]
+
+    monkeypatch.setattr("hoseline.procedures.placement.sequence.follow_on_cushion", not_narrowed)
+    locked_on_cushion = solve(strut_case, estimate_error=False)
+    assert np.max(np.abs(locked_on_cushion.centerline - without_cushion.centerline)) > 1e-3
+
+
+def test_a_narrowing_that_fails_follows_the_path_again_with_the_model_s_barrier(strut_case, without_cushion,
+                                                                                 monkeypatch):
+    def fails(props, clamps, state, model, **options):
+        return state, NewtonReport(False, 3, 1.0, -1, "iteration limit reached")
+
+    monkeypatch.setattr(cushion, "solve_with_contact", fails)
+    again = solve(strut_case, estimate_error=False)
+    assert any("did not narrow" in event and "followed again" in event for event in again.events)
+    np.testing.assert_allclose(again.centerline, without_cushion.centerline, rtol=0.0, atol=1e-12)
