@@ -72,3 +72,25 @@ def test_a_narrowing_that_fails_follows_the_path_again_with_the_model_s_barrier(
     again = solve(strut_case, estimate_error=False)
     assert any("did not narrow" in event and "followed again" in event for event in again.events)
     np.testing.assert_allclose(again.centerline, without_cushion.centerline, rtol=0.0, atol=1e-12)
+
+
+def test_a_planar_loop_closes_on_itself_at_the_same_touch_with_and_without_the_cushion(monkeypatch):
+    """1000 mm of hose between coaxial mounts 150 mm apart (self-contact, 50 segments): its free shape crosses
+    itself; with contact the loop closes on itself and stops there (docs/model.md: one pair at s = 76 mm, gap 0.0096
+    mm, push 2.48 N, stable, from the path without the cushion)."""
+    from hoseline.io.problem_file import problem_from_dict
+
+    loop = problem_from_dict({
+        "hose": {"length": 1000.0, "outer_diameter": 10.0, "bending_stiffness": 1e5, "torsional_stiffness": 1e5,
+                 "segments": 50},
+        "start": {"point": [0.0, 0.0, 0.0], "direction": [1.0, 0.0, 0.0]},
+        "end": {"point": [150.0, 2.0, 0.0], "direction": [-1.0, 0.0, 0.0]}, "contact": {"self": True}})
+    on_cushion = solve(loop, estimate_error=False)
+    monkeypatch.setattr(cushion, "CUSHION_RADII", 0.0)
+    without = solve(loop, estimate_error=False)
+    for result in (on_cushion, without):
+        itself, = result.contacts
+        assert itself.gap.size == 1 and 0.0 < itself.min_gap < 0.01 and result.stable
+        assert itself.arc_length[0] == pytest.approx(76.28, abs=0.01)
+        assert np.linalg.norm(itself.total_force) == pytest.approx(2.482, abs=1e-3)
+    np.testing.assert_allclose(on_cushion.centerline, without.centerline, rtol=0.0, atol=1e-9)
