@@ -73,7 +73,7 @@ def mesh_case() -> None:
     clipped = replace(plain, clips=(clip,))
     placed = solve(clipped, estimate_error=False)
     tangent = placed.frames[24, 2] + placed.frames[25, 2]
-    side = -np.cross(tangent, placed.frames[25, 0])  # on the other side (+t x d1) the place phase fails, see docs
+    side = -np.cross(tangent, placed.frames[25, 0])  # on the other side (+t x d1) the clip's path runs through it
     side /= np.linalg.norm(side)
     radius = 15.0
     centre = placed.centerline[25] + side * (plain.hose.outer_radius + radius - 1.0)  # 1 mm into the free shape

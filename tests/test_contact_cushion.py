@@ -11,28 +11,34 @@ from hoseline.mechanics.newton import NewtonReport
 from hoseline.model.clips import Clip
 from hoseline.model.obstacles import Cylinder
 from hoseline.procedures.contact import cushion
+from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.sequence import solve
 
 STRUT_RADIUS = 15.0
 
 
-@pytest.fixture(scope="module")
-def strut_case():
+def strut_problem(sense: float):
     """The issue's case (bench/bench_contact_placement.py --mesh) with the strut as a cylinder: the thesis hose (100
     segments, 180 deg), a fixed clip where the free hose passes station 50, self-contact, and a strut of radius
-    15 mm pressing 1 mm into the clipped shape at station 25: the hose slides along it for much of the place phase."""
+    15 mm pressing 1 mm into the clipped shape at station 25 from the side -sense (t x d1)."""
     plain = demo_problem(180.0, segments=100)
     free = solve(plain, estimate_error=False)
     h = plain.hose.segment_length
     clipped = replace(plain, clips=(Clip("fixed", free.centerline[50], 50 * h, free.frames[49, 2] + free.frames[50, 2]),))
     placed = solve(clipped, estimate_error=False)
     tangent = placed.frames[24, 2] + placed.frames[25, 2]
-    side = -np.cross(tangent, placed.frames[25, 0])
+    side = sense * np.cross(tangent, placed.frames[25, 0])
     side /= np.linalg.norm(side)
     centre = placed.centerline[25] + side * (plain.hose.outer_radius + STRUT_RADIUS - 1.0)
     axis = np.cross(tangent, side) / np.linalg.norm(np.cross(tangent, side))
     strut = Cylinder(centre - 100.0 * axis, centre + 100.0 * axis, STRUT_RADIUS, "strut")
     return replace(clipped, contact=(strut,), self_contact=True)
+
+
+@pytest.fixture(scope="module")
+def strut_case():
+    """The strut on the side where the hose slides along it for much of the place phase."""
+    return strut_problem(-1.0)
 
 
 @pytest.fixture(scope="module")
@@ -94,3 +100,14 @@ def test_a_planar_loop_closes_on_itself_at_the_same_touch_with_and_without_the_c
         assert itself.arc_length[0] == pytest.approx(76.28, abs=0.01)
         assert np.linalg.norm(itself.total_force) == pytest.approx(2.482, abs=1e-3)
     np.testing.assert_allclose(on_cushion.centerline, without.centerline, rtol=0.0, atol=1e-9)
+
+
+def test_a_clip_carried_through_the_strut_fails_naming_the_clip_and_the_obstacle():
+    # the strut on the other side: the clip's straight path to its point passes 15.7 mm from the strut's axis
+    # (radius 15 mm plus the hose's 5.05) between fractions 0.46 and 0.62 of the place phase, so the hose at the clip
+    # is crushed against the strut; no placement exists along that path
+    with pytest.raises(PlacementError) as failure:
+        solve(strut_problem(1.0), estimate_error=False)
+    message = str(failure.value)
+    assert "pressed hardest against 'strut'" in message and "next to the clip at station 50" in message
+    assert "straight line" in message and "Move the obstacle" in message

@@ -20,6 +20,7 @@ from typing import Callable
 
 import numpy as np
 
+from hoseline.mechanics.contact import STATION_KINDS
 from hoseline.mechanics.contact_newton import NEUTRAL_MODE, ContactModel, minimise_with_contact, solve_with_contact
 from hoseline.mechanics.newton import NewtonReport, RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
@@ -31,7 +32,7 @@ DOWNHILL_ITERATIONS = 1000  # of minimise_with_contact after a fold: a snap may 
 STEP_ITERATIONS = 60  # of solve_with_contact per step: a step not converged by then is halved (25 would halve
 # more steps on the strut of bench/bench_contact_placement.py --mesh, 1.7 against 2.2 s, and cost the floor path of
 # bench/bench_contact.py 40 %: 67 against 47 ms)
-POLISHED_TOLERANCE = 1e-12  # what the end of a path is polished to, if two iterations reach it
+POLISHED_TOLERANCE = 1e-12  # what the end of a path is polished to, if POLISH_ITERATIONS reach it
 POLISH_ITERATIONS = 6  # a 1 mm hose of 0.1 mm diameter on a sphere (fuzzing) needed 3 to 6: left at 1.03e-10 after 2
 STEP_HALVINGS = 10  # of a Newton step within a continuation step: a step that needs more is halved instead
 LAST_STEP_HALVINGS = 30  # for the smallest step, before the branch is judged to end in a fold
@@ -150,6 +151,36 @@ def model_radius(model: ContactModel | ObstaclePath) -> float:
     return model.obstacles.design.hose_radius if isinstance(model, ObstaclePath) else model.hose_radius
 
 
+CRUSHED_NEXT_TO = 2  # segments: a hardest push this close to a held station is blamed on that station's path
+
+
+def hardest_push(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> str:
+    """Where the hose of `state` is pressed hardest (obstacle, segment or station, push N, gap mm), for the message
+    of a path that cannot go on; next to the end fitting or a clip, what drives it there and what to do ("" if
+    nothing touches)."""
+    h = props.segment_length
+    nodes = centerline(state.frames, clamps.start_point, h)
+    kinds, first, second, _ = model.pairs(nodes, model.activation)
+    if kinds.size == 0:
+        return ""
+    terms = model.terms(nodes, model.stiffness * h, kinds, first, second)
+    forces, gaps = terms[3], terms[6]
+    hardest = int(np.argmax(np.linalg.norm(forces, axis=1)))
+    kind, where = int(kinds[hardest]), int(first[hardest])
+    place = f"station {where}" if kind in STATION_KINDS else f"segment {where}"
+    text = (f". Where the path last reached, the hose is pressed hardest against "
+            f"{model.owner(kind, int(second[hardest]))!r} at {place} ({np.linalg.norm(forces[hardest]):.4g} N, gap "
+            f"{gaps[hardest]:.2g} mm)")
+    held = [(clip.node, f"the clip at station {clip.node}") for clip in clamps.clips]
+    held.append((props.segments, "the end fitting"))
+    near = [name for node, name in held if abs(node - where) <= CRUSHED_NEXT_TO]
+    if near:
+        text += (f", next to {near[0]}: the placement carries it on a straight line from where it sits on the straight "
+                 "hose (the end fitting turning onto its mount), and that line drives the hose into the obstacle. Move "
+                 "the obstacle or the mount or clip, or place without the obstacle and read its clearance")
+    return text
+
+
 def _snap(phase: str, clamps: Clamps, props: RodProperties, before: RodState, start_from: RodState,
           model: ContactModel, tolerance: float, t: float, t_next: float, what: str, failure: NewtonReport,
           log: ContinuationLog | None) -> tuple[RodState, int]:
@@ -164,7 +195,8 @@ def _snap(phase: str, clamps: Clamps, props: RodProperties, before: RodState, st
         raise PlacementError(
             f"placement phase '{phase}' with contact failed at fraction {t_next:.4f} (last converged {t:.4f}): "
             f"residual {failure.residual:.2e} ({problem}), and no stable equilibrium was found downhill "
-            f"({report.message or f'{report.unstable_directions} unstable direction(s)'})")
+            f"({report.message or f'{report.unstable_directions} unstable direction(s)'})"
+            + hardest_push(props, clamps, before, model))
     if report.message == NEUTRAL_MODE:  # no snap: the step only looked unstable
         return relaxed, report.iterations
     h = props.segment_length
