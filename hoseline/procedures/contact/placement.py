@@ -11,6 +11,7 @@ barrier's Hessian, and a last check that nothing penetrates.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -65,6 +66,41 @@ def check_clear(where: str, props: RodProperties, clamps: Clamps, state: RodStat
         "The placement carries the hose from a straight line out of the start fitting (along start.direction, the "
         "hose length long) to the end fitting, and needs that start clear of every obstacle: move or shorten the "
         "obstacle so that it does not meet that line, or remove it from [contact]")
+
+
+HELD_PATH_SAMPLES = 201  # points along a held station's path where one crosses an obstacle, to say between which fractions
+
+
+def check_held_paths(place: Callable[[float], Clamps], clip_arcs: Sequence[float], model: ContactModel) -> None:
+    """Raise PlacementError if the place phase carries the end fitting or a clip (each on a straight line, from where
+    it sits on the straight hose to its mount or clip point) through an obstacle: the station held there, with the
+    hose's radius about it, would have to enter the obstacle, so no placement exists along that path.
+
+    place: the clamps at each fraction of the place phase.  clip_arcs: each clip's arc length (mm), for the message.
+    """
+    first, last = place(0.0), place(1.0)
+    held = [("the end fitting", lambda clamps: clamps.end_point, first.end_point, last.end_point)]
+    held += [(f"the clip at arc length {arc:g} mm", lambda clamps, j=j: clamps.clips[j].point, first.clips[j].point,
+              last.clips[j].point) for j, arc in enumerate(clip_arcs)]
+    obstacles = replace(model, self_exclusion=-1)  # the path of one station: no self-contact
+    for what, point_of, start, end in held:
+        crossed = _entered(obstacles, np.array([start, end]))
+        if not crossed:
+            continue
+        fractions = np.linspace(0.0, 1.0, HELD_PATH_SAMPLES)
+        inside = [t for t in fractions if _entered(obstacles, np.array([point_of(place(t))] * 2))]
+        between = f"between fractions {inside[0]:.3f} and {inside[-1]:.3f}" if inside else "between two samples"
+        raise PlacementError(
+            f"placement with contact: the place phase carries {what} on a straight line from "
+            f"{np.round(start, 3).tolist()} to {np.round(end, 3).tolist()} mm (from where it sits on the straight hose), "
+            f"and that line passes through obstacle {crossed[0]!r} {between}, nearer to it than the hose radius: the "
+            "hose held there would have to enter it, so no placement exists along that path. Move the obstacle, or the "
+            "clip or mount, or place without the obstacle and read its clearance")
+
+
+def _entered(model: ContactModel, nodes: np.ndarray) -> list[str]:
+    """The obstacles that the capsule of the hose radius about the segment nodes[0] to nodes[1] (mm) enters."""
+    return [name for name, gap in model.smallest_gaps(nodes).items() if gap < 0.0]
 
 
 def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState,

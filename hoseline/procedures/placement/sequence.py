@@ -319,6 +319,8 @@ class _Sequence:
                 contact_placement.check_clear("the straight hose the placement starts from", props, place_path(0.0),
                                               RodState(np.repeat(self.path.start_frame[None], props.segments, axis=0),
                                                        np.zeros(3), 0.0), self.contact)
+                contact_placement.check_held_paths(place_path, [clip.arc_length for clip in problem.clips],
+                                                   self.contact)
                 contact_placement.check_clear(f"the buckled hose at fraction {fraction:g} of the place phase (the first "
                                               "step, taken without contact)", props, place_path(fraction), state,
                                               self.contact)
