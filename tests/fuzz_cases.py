@@ -42,6 +42,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from hoseline import cli
+from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
 
 KINDS = ("problem", "iges", "feasible", "sweep", "poses", "mesh", "feasible_sweep", "cloud", "contact")
 FAILURES = ("traceback", "hang", "exit_code", "partial_output", "unclear_error", "refused_valid", "bad_result")
@@ -546,7 +547,10 @@ def check_summary(summary: dict, length: float) -> list[str]:
     if summary.get("stable") is not True:
         problems.append(f"not stable (margin {summary.get('stability_margin_N_per_rad2')})")
     residual = summary.get("residual")
-    if residual is None or not residual <= 1e-10:
+    # with contact the solver's contract is CONTACT_TOLERANCE: the barrier's stiffness (pressure / gap) lifts the
+    # rounding floor (a 41 mm hose of EI 7.3 N mm^2 on a box stops at 1.2e-10 however long it is polished)
+    loosest = CONTACT_TOLERANCE if summary.get("contact") else 1e-10
+    if residual is None or not residual <= loosest:
         problems.append(f"residual {residual}")
     length_error = summary.get("length_error")
     if length_error is None or not abs(length_error) <= 1e-9:

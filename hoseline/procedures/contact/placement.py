@@ -84,12 +84,16 @@ def check_held_paths(place: Callable[[float], Clamps], clip_arcs: Sequence[float
               last.clips[j].point) for j, arc in enumerate(clip_arcs)]
     obstacles = replace(model, self_exclusion=-1)  # the path of one station: no self-contact
     for what, point_of, start, end in held:
+        if np.array_equal(start, end):  # it stays where it sits on the straight hose, which is clear
+            continue
         crossed = _entered(obstacles, np.array([start, end]))
         if not crossed:
             continue
         fractions = np.linspace(0.0, 1.0, HELD_PATH_SAMPLES)
-        inside = [t for t in fractions if _entered(obstacles, np.array([point_of(place(t))] * 2))]
-        between = f"between fractions {inside[0]:.3f} and {inside[-1]:.3f}" if inside else "between two samples"
+        points = [point_of(place(t)) for t in fractions]
+        inside = [(t0, t1) for t0, t1, p, q in zip(fractions[:-1], fractions[1:], points[:-1], points[1:])
+                  if _entered(obstacles, np.array([p, q]))]  # pieces of the path that enter it
+        between = f"between fractions {inside[0][0]:.3f} and {inside[-1][1]:.3f}"
         raise PlacementError(
             f"placement with contact: the place phase carries {what} on a straight line from "
             f"{np.round(start, 3).tolist()} to {np.round(end, 3).tolist()} mm (from where it sits on the straight hose), "
@@ -99,7 +103,7 @@ def check_held_paths(place: Callable[[float], Clamps], clip_arcs: Sequence[float
 
 
 def _entered(model: ContactModel, nodes: np.ndarray) -> list[str]:
-    """The obstacles that the capsule of the hose radius about the segment nodes[0] to nodes[1] (mm) enters."""
+    """The obstacles that the capsule of the hose radius about the segment nodes[0] to nodes[1] (mm, apart) enters."""
     return [name for name, gap in model.smallest_gaps(nodes).items() if gap < 0.0]
 
 
