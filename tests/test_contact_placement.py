@@ -1,5 +1,6 @@
 """Contact from the problem file to the result: [contact] tables, placement with contact, the report per obstacle."""
 
+import re
 import tomllib
 
 import numpy as np
@@ -126,3 +127,12 @@ def test_accuracy_refuses_contact_up_front_instead_of_blaming_the_half_segment_s
     problem = problem_from_dict(with_contact({"obstacles": [DRUM]}))
     with pytest.raises(PlacementError, match="does not take contact yet"):
         solve_to_accuracy(problem, 0.01)
+
+
+def test_an_end_mount_inside_an_obstacle_is_refused_naming_the_fitting_and_where_its_path_enters():
+    sphere = {"kind": "sphere", "center": [100.0, 0.0, -82.0], "radius": 4.0, "name": "knob"}  # around the end point
+    with pytest.raises(PlacementError) as failure:
+        solve(problem_from_dict(with_contact({"obstacles": [sphere]})), estimate_error=False)
+    message = str(failure.value)
+    assert "carries the end fitting on a straight line" in message and "obstacle 'knob'" in message
+    assert re.search(r"between fractions 0\.\d+ and 1\.000", message)
