@@ -68,7 +68,7 @@ def check_clear(where: str, props: RodProperties, clamps: Clamps, state: RodStat
         "obstacle so that it does not meet that line, or remove it from [contact]")
 
 
-HELD_PATH_SAMPLES = 201  # points along a held station's path where one crosses an obstacle, to say between which fractions
+HELD_PATH_SAMPLES = 201  # points along a held station's path that crosses an obstacle: where, in fractions
 
 
 def check_held_paths(place: Callable[[float], Clamps], clip_arcs: Sequence[float], model: ContactModel) -> None:
@@ -93,7 +93,7 @@ def check_held_paths(place: Callable[[float], Clamps], clip_arcs: Sequence[float
         points = [point_of(place(t)) for t in fractions]
         inside = [(t0, t1) for t0, t1, p, q in zip(fractions[:-1], fractions[1:], points[:-1], points[1:])
                   if _entered(obstacles, np.array([p, q]))]  # pieces of the path that enter it
-        between = f"between fractions {inside[0][0]:.3f} and {inside[-1][1]:.3f}"
+        between = f"between fractions {inside[0][0]:.3f} and {inside[-1][1]:.3f}" if inside else "(grazing)"
         raise PlacementError(
             f"placement with contact: the place phase carries {what} on a straight line from "
             f"{np.round(start, 3).tolist()} to {np.round(end, 3).tolist()} mm (from where it sits on the straight hose), "

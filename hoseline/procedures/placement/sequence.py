@@ -20,7 +20,8 @@ Newton (procedures/contact/): after the first step (taken without contact, from 
 hose, which must clear every obstacle, as must the buckled shape) the place and twist phases
 and the final equilibrium keep the hose out of the obstacles and itself (each phase followed on a
 cushion, a wider barrier narrowed to the model's at its end: procedures/contact/cushion.py); the
-result reports the contacts per obstacle.  The mounts' symmetry images and the error estimate are skipped then.
+result reports the contacts per obstacle.  The mounts' symmetry images and the error estimate are
+skipped then.
 """
 
 from __future__ import annotations
