@@ -10,12 +10,12 @@ cylinder and 7053 against the strut as 100 000 triangles, against 340 without co
 
 How.  The path is followed with the barrier acting across CUSHION_RADII hose radii (the same
 reference pressure, ContactModel.with_activation): the hose rests on a cushion about that deep
-and slides on it in long steps (the same strut: 492 and 745 iterations).  At the end of the path
+and slides on it in long steps (the same strut: 569 and 726 iterations in all).  At the end of the path
 the cushion is narrowed NARROWING-fold at a time to the model's own d_hat, each a Newton solve
 from the last state under the path's final clamps (6 to 9 iterations each on the strut), and the
 end is polished as follow_contact's.  So the result is an equilibrium with the model's barrier,
 and on the issue's case the one the path with the model's barrier all along ends at (the same to
-5e-13 mm with the cylinder and 2e-9 mm with the mesh, tests/test_contact_cushion.py).  Each
+5e-13 mm with the cylinder, tests/test_contact_cushion.py, and 2e-9 mm with the mesh).  Each
 phase of the placement ends narrowed, before the end's and the fixed clips' roll is locked at the
 torque-free angle: an angle found on the cushion belongs to a hose held off by it (locked there,
 the same case ended 0.057 mm away, on another equilibrium).
@@ -36,7 +36,7 @@ from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_c
 from hoseline.procedures.placement.continuation import ContinuationLog, Progress, StepControl
 
 CUSHION_RADII = 0.2  # the barrier distance along a placement path, in hose radii (1 mm for the thesis hose; on the
-# issue's case 0.06 r took 767 and 832 iterations, 0.5 r 502 and 591, 0.2 r 492 and 745: cylinder and mesh)
+# issue's case 0.06 r took 1.2 and 4.2 s, 0.5 r 0.87 and 4.6 s, 0.2 r 0.78 and 4.5 s: cylinder and mesh, one run each)
 NARROWING = 10.0  # the cushion is narrowed by this factor at a time at the end of a path
 
 
