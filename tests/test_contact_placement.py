@@ -136,3 +136,12 @@ def test_an_end_mount_inside_an_obstacle_is_refused_naming_the_fitting_and_where
     message = str(failure.value)
     assert "carries the end fitting on a straight line" in message and "obstacle 'knob'" in message
     assert re.search(r"between fractions 0\.\d+ and 1\.000", message)
+
+
+def test_a_drum_of_40_mm_lies_across_the_end_fitting_s_path_and_is_refused_before_any_solve():
+    # docs/model.md: it once stopped at fraction 0.67 of the place phase; the end fitting's straight path from the
+    # straight hose's end (-100, 0, 255) to its mount (100, 0, -80) passes within the hose radius of the drum there
+    with pytest.raises(PlacementError) as failure:
+        solve(problem_from_dict(with_contact({"obstacles": [DRUM | {"radius": 40.0}]})), estimate_error=False)
+    assert "carries the end fitting" in str(failure.value)
+    assert "obstacle 'drum' between fractions 0.680 and 0.705" in str(failure.value)
