@@ -140,18 +140,21 @@ def only(model: ContactModel, obstacles: Collection[int], *, self_contact: bool)
 
 
 def move_is_clear(props: RodProperties, before: tuple[Clamps, RodState], after: tuple[Clamps, RodState],
-                  model: ContactModel, carry: Pose) -> bool:
+                  model: ContactModel, carry: Pose | None) -> bool:
     """Whether the hose can go from `before` to `after` (each a state under its clamps; only the start point
-    counts) while the obstacles of `model`, where they are before, are carried rigidly by `carry`, without
-    crossing any of them (see the module doc).  `before` must not penetrate them."""
+    counts) while the obstacles of `model`, where they are before, are carried rigidly by `carry` (None: they
+    stay), without crossing any of them (see the module doc).  `before` must not penetrate them."""
     h = props.segment_length
     (clamps_before, state_before), (clamps_after, state_after) = before, after
-    back = carry.inverse()
-    start = carried(np.asarray(clamps_after.start_point, dtype=float), back)
-    frames = turned(state_after.frames, back)
+    start, frames = np.asarray(clamps_after.start_point, dtype=float), state_after.frames
+    if carry is not None:  # the move as the obstacles see it: the hose carried back by their motion
+        back = carry.inverse()
+        start, frames = carried(start, back), turned(frames, back)
     tangents_before, tangents_after = state_before.frames[:, 2], frames[:, 2]
-    turns = np.arctan2(np.linalg.norm(np.cross(tangents_before, tangents_after), axis=1),
-                       np.einsum("ij,ij->i", tangents_before, tangents_after))
+    a, b = tangents_before, tangents_after  # their cross product written out: np.cross costs more than the rest
+    sines = np.sqrt((a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]) ** 2 + (a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]) ** 2
+                    + (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) ** 2)
+    turns = np.arctan2(sines, np.einsum("ij,ij->i", a, b))
     start_move = float(np.linalg.norm(start - clamps_before.start_point))
     if start_move == 0.0 and not np.any(turns):
         return True

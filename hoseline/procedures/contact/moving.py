@@ -70,7 +70,7 @@ class MovingObstacles:
             obstacles = [j for j, owner in enumerate(self.bodies) if owner == body]
             if not obstacles and not (body is None and self_contact):
                 continue
-            carry = Pose() if body is None else placed_before.poses[body].inverse().then(placed_after.poses[body])
+            carry = None if body is None else placed_before.poses[body].inverse().then(placed_after.poses[body])
             group = only(placed_before.model, obstacles, self_contact=body is None)
             if not move_is_clear(props, (clamps_before, state_before), (clamps_after, state_after), group, carry):
                 return False

@@ -109,6 +109,7 @@ class _Tracker:
         self.obstacles = (MovingObstacles(problem_contact_model(sweep.problem), contact_bodies)
                           if sweep.problem.has_contact else None)
         self.placed = self.obstacles.at(self.poses) if self.obstacles is not None else None
+        self.clamps_now = self.clamps(self.poses)  # the clamps of the equilibrium reached last
 
     def clamps(self, poses: Mapping[str | None, Pose]) -> Clamps:
         """The clamps with each body at poses[body]: the fittings' and the clips'."""
@@ -140,7 +141,7 @@ class _Tracker:
             trial, report = solve_equilibrium(self.props, clamps, guesses[0])
         else:  # from the prediction or the previous equilibrium, if no obstacle can pass through the hose on the way
             placed = self.obstacles.at(target)
-            begin = self.obstacles.start(self.props, (self.clamps(self.poses), self.state, self.placed), clamps, placed,
+            begin = self.obstacles.start(self.props, (self.clamps_now, self.state, self.placed), clamps, placed,
                                          guesses)
             trial, report = self.state, NewtonReport(False, 0, math.inf, -1, "no start the move check admits")
             if begin is not None:
@@ -174,7 +175,7 @@ class _Tracker:
             self.before = self.state if self.obstacles is not None and not events else None
         else:
             self.before = self.state
-        self.state, self.poses, self.placed = trial, target, placed
+        self.state, self.poses, self.placed, self.clamps_now = trial, target, placed, clamps
         return _Reached(trial, clamps, None if placed is None else placed.model, iterations, events, jump)
 
     def _largest_carry(self, target: Mapping[str | None, Pose], nodes: np.ndarray) -> float:
