@@ -242,7 +242,7 @@ def _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, 
     """The step from t to t_next ended on an unstable equilibrium: bracket the loss of
     stability, then move to the lowest stable equilibrium next to it."""
     stable_t, stable_state = t, state
-    unstable_t, unstable_state = t_next, trial
+    unstable_t = t_next
     for _ in range(2):  # bracket the crossing (for the report) to 1/4 of the step
         middle = 0.5 * (stable_t + unstable_t)
         mid_state, mid_report = solve_equilibrium(props, path(middle), stable_state, tolerance=control.path_tolerance)
@@ -252,7 +252,7 @@ def _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, 
         if mid_report.unstable_directions == 0:
             stable_t, stable_state = middle, mid_state
         else:
-            unstable_t, unstable_state = middle, mid_state
+            unstable_t = middle
     # relax at the end of the step, not at the bracketed crossing: right at the crossing the new
     # branch is degenerate (zero eigenvalue) and Newton slows down; the branch is the same one.
     clamps = path(t_next)
