@@ -345,7 +345,7 @@ def test_pairs_found_through_the_tree_are_those_of_all_triangles():
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_one_walk_down_both_trees_finds_the_leaves_of_a_walk_per_segment(seed):
-    from hoseline.mechanics.bounding_volumes import LEAF_SIZE, box_gap, build_tree, chain_tree, leaves_within
+    from hoseline.mechanics.bounding_volumes import LEAF_SIZE, build_tree, chain_tree, leaf_within, leaves_within
 
     rng = np.random.default_rng(seed)
     corners = rng.uniform(-50.0, 50.0, (3000, 1, 3)) + rng.normal(scale=2.0, size=(3000, 3, 3))
@@ -360,7 +360,7 @@ def test_one_walk_down_both_trees_finds_the_leaves_of_a_walk_per_segment(seed):
     found = sorted(zip(segments.tolist(), leaves.tolist()))
     every_leaf = np.flatnonzero(children[:, 0] < 0)
     expected = sorted((i, int(leaf)) for i in range(count) for leaf in every_leaf
-                      if box_gap(starts[i], ends[i], lower[leaf], upper[leaf]) < reaches[i])
+                      if leaf_within(tuple(starts[i]), tuple(ends[i]), lower[leaf], upper[leaf], reaches[i]))
     assert len(expected) > 10 and found == expected
 
 

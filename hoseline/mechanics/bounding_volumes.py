@@ -17,6 +17,7 @@ from numba import njit
 from hoseline.mechanics.proximity import segment_plane_gap, segment_triangle_distance
 
 LEAF_SIZE = 4
+LEAF_PIECES = 4  # of a segment, for the leaf test of leaves_within (leaf_within)
 STACK_SIZE = 256  # far above the depth of a median-split tree (about log2(items / LEAF_SIZE))
 
 
@@ -119,8 +120,9 @@ def chain_tree(starts, ends, reaches):
 @njit(cache=True)
 def leaves_within(starts, ends, reaches, chain, lower, upper, children, ranges, root):
     """Every (segment, leaf) pair of a chain of segments (chain_tree) and a tree's leaves below `root` whose leaf box
-    comes within the segment's reach (box_gap < reach; a box holding that leaf is then within it too), found by
-    one walk down both trees at once instead of one walk from the root per segment.
+    may come within the segment's reach (leaf_within; the grown boxes of both trees' inner nodes hold their
+    children's, so they meet where a leaf's do), found by one walk down both trees at once instead of one walk
+    from the root per segment.
 
     Returns (segments, leaves): the segment index and the leaf node of each pair, in no particular order.
     """
@@ -141,7 +143,7 @@ def leaves_within(starts, ends, reaches, chain, lower, upper, children, ranges, 
         on_leaf, on_chain_leaf = children[node, 0] < 0, link >= size
         if on_leaf and on_chain_leaf:
             i = link - size
-            if box_gap(point_of(starts, i), point_of(ends, i), lower[node], upper[node]) < reaches[i]:
+            if leaf_within(point_of(starts, i), point_of(ends, i), lower[node], upper[node], reaches[i]):
                 segments.append(i)
                 leaves.append(node)
             continue
@@ -195,6 +197,25 @@ def box_gap(p, q, lower, upper):
         elif middle > upper[k]:
             ball += (middle - upper[k]) ** 2
     return max(math.sqrt(boxes), math.sqrt(ball) - 0.5 * math.sqrt(half))
+
+
+@njit(cache=True, inline="always")
+def leaf_within(p, q, lower, upper, reach):
+    """Whether segment pq may come within `reach` (mm) of a box, the leaf test of leaves_within: box_gap below it,
+    and for a segment, the box_gap of one of its LEAF_PIECES equal pieces too (sharper for a segment long against
+    the box: the distance is the smallest of the pieces'; box_gap of the whole is never above a piece's, so it
+    rejects first).  Where the pieces' ends move by at most m, each bound changes by at most 2 m (leaf_lists.py)."""
+    if not box_gap(p, q, lower, upper) < reach:
+        return False
+    if p[0] == q[0] and p[1] == q[1] and p[2] == q[2]:
+        return True
+    for piece in range(LEAF_PIECES):
+        s, e = piece / LEAF_PIECES, (piece + 1) / LEAF_PIECES
+        a = (p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1]), p[2] + s * (q[2] - p[2]))
+        b = (p[0] + e * (q[0] - p[0]), p[1] + e * (q[1] - p[1]), p[2] + e * (q[2] - p[2]))
+        if box_gap(a, b, lower, upper) < reach:
+            return True
+    return False
 
 
 @njit(cache=True, inline="always")

@@ -71,8 +71,10 @@ from numba import njit
 from hoseline.mechanics.bounding_volumes import (
     LEAF_SIZE,
     STACK_SIZE,
+    box_gap,
     build_tree,
     chain_tree,
+    corners_of,
     leaves_within,
     point_of,
     segment_search,
@@ -90,6 +92,8 @@ from hoseline.mechanics.contact import (
     segment_closest,
     triangle_parameters,
 )
+from hoseline.mechanics.leaf_lists import MARGIN_RADII, REACH_RADII, LeafLists
+from hoseline.mechanics.proximity import segment_plane_gap, segment_triangle_distance
 from hoseline.model.obstacles import has_area
 
 FLAT = 1e-9  # sine of the angle below which two triangles sharing an edge lie in one plane
@@ -144,6 +148,9 @@ class MeshArrays:
     edge_roots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     edge_mesh: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     owners: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    # the leaves near the hose of the last searches (leaf_lists.py); not copied by dataclasses.replace: a mesh moved
+    # or left out has other trees, and starts its own
+    leaf_lists: LeafLists = field(default_factory=LeafLists, init=False, compare=False, repr=False)
 
     @property
     def count(self) -> int:
@@ -162,9 +169,13 @@ class MeshArrays:
         step filter must watch: a step can carry the hose to where they are the nearest."""
         if np.isscalar(cutoffs):
             cutoffs = (np.full(nodes.shape[0], float(cutoffs)), np.full(nodes.shape[0] - 1, float(cutoffs)))
-        return mesh_pairs(nodes, hose_radius, *cutoffs, self.triangles, self.features, self.flat_edges, self.flat_sides,
-                          *self.triangle_tree, self.triangle_roots, self.edges, self.corners, self.joints,
-                          *self.edge_tree, self.edge_roots, every_feature)
+        station_cutoffs, segment_cutoffs = cutoffs
+        stations = nodes[1:]
+        near_stations = self._leaves("stations", stations, stations, station_cutoffs[1:] + hose_radius, hose_radius)
+        near_segments = self._leaves("segments", nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, hose_radius)
+        return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles, self.features,
+                          self.flat_edges, self.flat_sides, self.triangle_tree[3], *near_stations, self.edges,
+                          self.corners, self.joints, self.edge_tree[3], *near_segments, every_feature)
 
     def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
                      bound: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -175,6 +186,30 @@ class MeshArrays:
         bounds = np.full(starts.shape[0], float(bound)) if np.ndim(bound) == 0 else np.asarray(bound, dtype=float)
         return segment_gaps(starts, ends, hose_radius, bounds, self.triangles, self.normals, *self.triangle_tree,
                             self.triangle_roots)
+
+    def station_gaps(self, nodes: np.ndarray, hose_radius: float, bounds: np.ndarray) -> np.ndarray:
+        """(N+1,) the smallest gap (mm) of each station of `nodes` ((N+1, 3) mm) over every mesh, bounds[k] (mm) where
+        none is nearer: np.min(segment_gaps(nodes, nodes, ...)[0], axis=0) to the bit, but from the leaves near the
+        stations (leaf_lists.py), not a search of each tree from its root per station."""
+        stations = nodes[1:]
+        listed = self.leaf_lists.leaves("stations", stations, stations, bounds[1:] + hose_radius, self.triangle_tree,
+                                        self.triangle_roots, MARGIN_RADII * hose_radius, _leaves_in_order,
+                                        REACH_RADII * hose_radius)
+        if listed is None:  # bounds too long for a list: the search from the root finds the nearest sooner
+            return np.min(self.segment_gaps(nodes, nodes, hose_radius, bounds)[0], axis=0)
+        first = np.min(self.segment_gaps(nodes[:1], nodes[:1], hose_radius, bounds[:1])[0], axis=0)  # the held one
+        return np.concatenate([first, nearest_in_leaves(stations, bounds[1:], hose_radius, *listed, self.triangles,
+                                                        self.normals, *self.triangle_tree[:2], self.triangle_tree[3])])
+
+    def _leaves(self, search: str, starts: np.ndarray, ends: np.ndarray, reaches: np.ndarray, hose_radius: float):
+        """(segments, leaves) within reaches (mm) of the chain starts, ends (mm) in the triangle tree (search
+        "stations") or the edge tree ("segments"): from a leaf list (leaf_lists.py) where one holds or is made, else
+        one walk (_leaves_in_order)."""
+        tree, roots = (self.triangle_tree, self.triangle_roots) if search == "stations" else (self.edge_tree,
+                                                                                              self.edge_roots)
+        listed = self.leaf_lists.leaves(search, starts, ends, reaches, tree, roots, MARGIN_RADII * hose_radius,
+                                        _leaves_in_order, REACH_RADII * hose_radius)
+        return listed if listed is not None else _leaves_in_order(starts, ends, reaches, *tree, roots)
 
     def smallest_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float, first_bound: float) -> np.ndarray:
         """(K,) the smallest gap (mm) of the capsules of `hose_radius` about the segments from `starts` to `ends` to
@@ -339,17 +374,17 @@ def _forest(item_corners: list[np.ndarray]) -> tuple[np.ndarray, tuple, np.ndarr
 
 @njit(cache=True)
 def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges, flat_sides,
-               t_lower, t_upper, t_children, t_ranges, t_roots, edges, corners, joints, e_lower, e_upper, e_children, e_ranges,
-               e_roots, every_feature):
+               t_ranges, near_stations, station_leaves, edges, corners, joints, e_ranges, near_segments, segment_leaves,
+               every_feature):
     """Station-triangle and segment-edge pairs with a gap (mm) below the cutoff (mm) of their station or segment.
 
     nodes (N+1, 3) mm (station 0 is held: not paired); station_cutoffs (N+1,), segment_cutoffs (N,) mm.
+    near_stations, station_leaves: the triangle tree's leaves within reach of stations 1..N (indexed from 0;
+    _leaves_in_order, through leaf_lists.LeafLists); near_segments, segment_leaves: the edge tree's of each segment.
     Returns (kinds, first (station or segment), second (triangle or edge), gaps) as contact.pair_gaps.
     """
     kinds, first, second, gaps = [0 for _ in range(0)], [0 for _ in range(0)], [0 for _ in range(0)], [0.0 for _ in range(0)]
-    stations = nodes[1:]
-    found, leaves = _leaves_in_order(stations, stations, station_cutoffs[1:] + hose_radius, t_lower, t_upper,
-                                     t_children, t_ranges, t_roots)
+    found, leaves = near_stations, station_leaves
     for pair in range(found.shape[0]):
         k, leaf = found[pair] + 1, leaves[pair]
         cutoff = station_cutoffs[k]
@@ -369,8 +404,7 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
             first.append(k)
             second.append(position)
             gaps.append(gap)
-    found, leaves = _leaves_in_order(nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, e_lower, e_upper, e_children,
-                                     e_ranges, e_roots)
+    found, leaves = near_segments, segment_leaves
     for pair in range(found.shape[0]):
         i, leaf = found[pair], leaves[pair]
         cutoff = segment_cutoffs[i]
@@ -466,6 +500,28 @@ def segment_gaps(starts, ends, hose_radius, bounds, triangles, normals, lower, u
                 gaps[m, i] = d - hose_radius
                 nearest[m, i] = position
     return gaps, nearest
+
+
+@njit(cache=True)
+def nearest_in_leaves(points, bounds, hose_radius, near, leaves, triangles, normals, lower, upper, ranges):
+    """(n,) the gap (mm) of each point (n, 3) mm to the nearest triangle of its listed leaves (near[p] the point of
+    leaf leaves[p]; lower, upper, ranges: the tree's), bounds[i] (mm) where none is nearer; the tests and
+    arithmetic of segment_gaps's search, so that the same triangle gives the same bits."""
+    best = bounds + hose_radius
+    found = np.zeros(points.shape[0], np.bool_)
+    for pair in range(near.shape[0]):
+        i, leaf = near[pair], leaves[pair]
+        x = point_of(points, i)
+        if box_gap(x, x, lower[leaf], upper[leaf]) >= best[i]:  # nothing in it nearer than the nearest found
+            continue
+        for position in range(ranges[leaf, 0], ranges[leaf, 0] + ranges[leaf, 1]):
+            a, b, c = corners_of(triangles, position)
+            if segment_plane_gap(x, x, a, point_of(normals, position)) >= best[i]:
+                continue
+            d = segment_triangle_distance(x, x, a, b, c)[0]
+            if d < best[i]:
+                best[i], found[i] = d, True
+    return np.where(found, best - hose_radius, bounds)
 
 
 @njit(cache=True)

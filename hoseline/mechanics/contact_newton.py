@@ -372,7 +372,7 @@ def motion_filter(nodes: np.ndarray, turns: np.ndarray, start_move: float, h: fl
     swept = None
     if model.mesh.count:
         station_cutoffs = reach + model.activation
-        station_gaps = np.min(model.mesh.segment_gaps(nodes, nodes, model.hose_radius, station_cutoffs)[0], axis=0)
+        station_gaps = model.mesh.station_gaps(nodes, model.hose_radius, station_cutoffs)
         station_gaps[station_gaps >= station_cutoffs] = math.inf  # out of reach
         bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
         swept = (nodes, station_gaps, bend)
