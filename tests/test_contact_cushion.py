@@ -123,3 +123,30 @@ def test_a_path_that_jams_says_where_the_hose_is_pressed_hardest(monkeypatch):
     message = str(failure.value)
     assert "pressed hardest against 'strut'" in message and "next to the clip at station 50" in message
     assert "straight line" in message and "Move the obstacle" in message
+
+
+def test_a_path_step_whose_newton_creeps_is_halved_at_once_and_the_path_ends_where_it_did(strut_case, without_cushion,
+                                                                                          monkeypatch):
+    """Continuation steps whose Newton iterations are cut below STALLED_STEP three times in a row are given up
+    ("stalled") and halved instead of crept through: on the issue's strut case far fewer iterations, the same
+    equilibrium as a path whose Newton never stalls (and as the path without the cushion)."""
+    from hoseline.procedures.contact import continuation
+
+    messages = []
+
+    def recorded(*arguments, **options):
+        state, report = solve_with_contact(*arguments, **options)
+        messages.append(report.message)
+        return state, report
+
+    solve_with_contact = continuation.solve_with_contact
+    monkeypatch.setattr(continuation, "solve_with_contact", recorded)
+    with_stall = solve(strut_case, estimate_error=False)
+    assert "stalled" in messages
+    monkeypatch.setattr(continuation, "STALLED_ITERATIONS", 0)  # never stall: Newton creeps until it fails
+    creeping = solve(strut_case, estimate_error=False)
+    np.testing.assert_allclose(with_stall.centerline, creeping.centerline, rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(with_stall.centerline, without_cushion.centerline, rtol=0.0, atol=1e-9)
+    assert with_stall.lock_angle_deg == pytest.approx(creeping.lock_angle_deg, abs=1e-9)
+    assert with_stall.iterations < 0.9 * creeping.iterations
+

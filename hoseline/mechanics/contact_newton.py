@@ -60,6 +60,7 @@ from hoseline.mechanics.newton import NewtonReport, RodProperties, apply_step, e
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 
 SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
+STALLED_STEP = 1.0 / 64.0  # of a Newton step: a step cut below it makes no headway (solve_with_contact's stall)
 SWEPT_EVALUATIONS = 256  # distances per segment-edge pair in the swept check of a step (contact_mesh.swept_edges_clear)
 
 
@@ -408,6 +409,7 @@ def solve_with_contact(
     max_iterations: int = 60,
     max_halvings: int = 30,
     start_is_clear: bool = False,
+    stall: int = 0,
 ) -> tuple[RodState, NewtonReport]:
     """Newton iterations from `state` (which must not penetrate) to an equilibrium with contact.
 
@@ -418,6 +420,8 @@ def solve_with_contact(
     start_is_clear: the caller has shown that `state` clears everything (the move check of
     procedures/contact/moving.py admitted it), so it is not searched for penetration again (on a
     fine mesh that search costs as much as an iteration's pairs).
+    stall: if above 0, give up ("stalled") after that many iterations in a row whose step was cut below
+    STALLED_STEP: a continuation halves its step sooner than Newton creeps on (0: never).
     Unstable directions counted by the KKT pivots at the converged state are confirmed by the dense
     reduced Hessian (_lowest_mode): an eigenvalue above -NEUTRAL times the largest is zero (neutral).
     One BLAS thread: the dense systems are small, and threads only contend for the cores (10x
@@ -425,17 +429,17 @@ def solve_with_contact(
     """
     with one_blas_thread():
         return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings,
-                                   start_is_clear)
+                                   start_is_clear, stall)
 
 
-def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings, start_is_clear):
+def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings, start_is_clear, stall):
     """solve_with_contact without the thread limit."""
     inside = None if start_is_clear else model.penetration(centerline(state.frames, clamps.start_point,
                                                                       props.segment_length))
     if inside is not None:
         return state, NewtonReport(False, 0, math.inf, -1, inside)
     system = evaluate_contact(props, clamps, state, model)
-    unstable = -1
+    unstable, stalled = -1, 0
     for iteration in range(max_iterations + 1):
         if not np.isfinite(system.residual):
             return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
@@ -462,6 +466,9 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
         if accepted is None:
             return state, NewtonReport(False, iteration + 1, system.residual, unstable, "no acceptable step found")
         state, system = accepted
+        stalled = stalled + 1 if alpha < STALLED_STEP else 0
+        if stall and stalled >= stall:
+            return state, NewtonReport(False, iteration + 1, system.residual, unstable, "stalled")
     return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
 
 

@@ -34,6 +34,7 @@ STEP_ITERATIONS = 60  # of solve_with_contact per step: a step not converged by 
 # bench/bench_contact.py 40 %: 67 against 47 ms)
 POLISHED_TOLERANCE = 1e-12  # what the end of a path is polished to, if POLISH_ITERATIONS reach it
 POLISH_ITERATIONS = 6  # a 1 mm hose of 0.1 mm diameter on a sphere (fuzzing) needed 3 to 6: left at 1.03e-10 after 2
+STALLED_ITERATIONS = 3  # of Newton steps cut below contact_newton.STALLED_STEP in a row: the path step is halved
 STEP_HALVINGS = 10  # of a Newton step within a continuation step: a step that needs more is halved instead
 LAST_STEP_HALVINGS = 30  # for the smallest step, before the branch is judged to end in a fold
 MOST_SNAPS = 100  # of one path: a path that keeps snapping is not being followed (a coarse hose coiling on itself
@@ -93,7 +94,8 @@ def follow_contact(
         trial, report = solve_with_contact(props, clamps, begin, model_next, tolerance=tolerance,
                                            max_iterations=STEP_ITERATIONS,
                                            max_halvings=LAST_STEP_HALVINGS if last_try else STEP_HALVINGS,
-                                           start_is_clear=moving is not None)  # the move check admitted it
+                                           start_is_clear=moving is not None,  # the move check admitted it
+                                           stall=0 if last_try else STALLED_ITERATIONS)
         iterations += report.iterations
         if log is not None:
             log.iterations += report.iterations
