@@ -572,7 +572,8 @@ def swept_edges_clear(start, end, first, second, edges, clearances, evaluations)
         i, a, b, clearance = first[pair], edges[second[pair], 0], edges[second[pair], 1], clearances[pair]
         p0, q0, p1, q1 = start[i], start[i + 1], end[i], end[i + 1]
         move = math.sqrt(max(_squared_distance(p0, p1), _squared_distance(q0, q1)))  # the larger end's move
-        if segment_closest(p0, q0, a, b)[0] - move > clearance:  # cannot come nearer than its move: no search
+        start_pair = segment_closest(p0, q0, a, b)
+        if start_pair[0] - move > clearance:  # cannot come nearer than its move: no search
             continue
         intervals[0] = (0.0, 1.0)
         count, used = 1, 0
@@ -583,7 +584,8 @@ def swept_edges_clear(start, end, first, second, edges, clearances, evaluations)
             _interpolate(q0, q1, ta, qa)
             _interpolate(p0, p1, tb, pb)
             _interpolate(q0, q1, tb, qb)
-            da, sa, ua = segment_closest(pa, qa, a, b)
+            # at the start, the pair just found (p0 + 0 (p1 - p0) is p0 to the bit)
+            da, sa, ua = start_pair if ta == 0.0 else segment_closest(pa, qa, a, b)
             db, sb, ub = segment_closest(pb, qb, a, b)
             used += 2
             if min(da, db) <= clearance:
