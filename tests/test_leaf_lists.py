@@ -5,7 +5,7 @@ import pickle
 import numpy as np
 import pytest
 
-from hoseline.mechanics.bounding_volumes import LEAF_SIZE, box_gap, build_tree, leaf_within
+from hoseline.mechanics.bounding_volumes import LEAF_SIZE, box_gap, build_tree, leaf_bounds, leaf_within
 from hoseline.mechanics.contact_mesh import _leaves_in_order, pack_meshes
 from hoseline.mechanics.leaf_lists import LeafLists
 
@@ -41,6 +41,20 @@ def test_the_leaf_test_never_rejects_a_leaf_within_reach(seed):
             assert _segment_box_distance(p, q, lower, upper) >= reach - 1e-9
             sharper += box_gap(tuple(p), tuple(q), lower, upper) < reach
     assert sharper > 10
+
+
+def test_the_leaf_bound_is_below_the_reach_exactly_where_the_leaf_test_holds():
+    rng = np.random.default_rng(5)
+    lower, upper, children, ranges = _random_tree(rng, 500)
+    starts = rng.uniform(-50.0, 50.0, (200, 3))
+    ends = np.where(rng.random((200, 1)) < 0.2, starts, starts + rng.normal(scale=6.0, size=(200, 3)))
+    segments = np.repeat(np.arange(200), 20)
+    leaves = rng.choice(np.flatnonzero(children[:, 0] < 0), segments.size)
+    bounds = leaf_bounds(starts, ends, segments, leaves, lower, upper)
+    for reach in (1.0, 5.0, 20.0):
+        within = [leaf_within(tuple(starts[i]), tuple(ends[i]), lower[leaf], upper[leaf], reach)
+                  for i, leaf in zip(segments, leaves)]
+        assert np.array_equal(bounds < reach, within) and 0 < sum(within) < len(within)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -218,6 +218,29 @@ def leaf_within(p, q, lower, upper, reach):
     return False
 
 
+@njit(cache=True)
+def leaf_bounds(starts, ends, segments, leaves, lower, upper):
+    """The bound behind leaf_within of each (segment, leaf) pair (mm): the larger of box_gap of segment
+    starts[i] to ends[i] and the smallest box_gap of its LEAF_PIECES pieces (of a station, its box_gap); leaf_within
+    holds where it is below the reach."""
+    bounds = np.empty(segments.shape[0])
+    for pair in range(segments.shape[0]):
+        i, node = segments[pair], leaves[pair]
+        p, q = point_of(starts, i), point_of(ends, i)
+        whole = box_gap(p, q, lower[node], upper[node])
+        if p[0] == q[0] and p[1] == q[1] and p[2] == q[2]:
+            bounds[pair] = whole
+            continue
+        smallest = math.inf
+        for piece in range(LEAF_PIECES):
+            s, e = piece / LEAF_PIECES, (piece + 1) / LEAF_PIECES
+            a = (p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1]), p[2] + s * (q[2] - p[2]))
+            b = (p[0] + e * (q[0] - p[0]), p[1] + e * (q[1] - p[1]), p[2] + e * (q[2] - p[2]))
+            smallest = min(smallest, box_gap(a, b, lower[node], upper[node]))
+        bounds[pair] = max(whole, smallest)
+    return bounds
+
+
 @njit(cache=True, inline="always")
 def segment_search(p, q, bound, triangles, normals, lower, upper, children, ranges, root, stack):
     """Branch and bound over the tree from node `root` for the segment pq, looking for a triangle nearer than `bound` (mm).

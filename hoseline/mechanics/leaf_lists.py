@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.bounding_volumes import leaf_within, point_of
+from hoseline.mechanics.bounding_volumes import leaf_bounds, leaf_within, point_of
 
 MARGIN_RADII = 0.2  # how far each reach is grown for a list, in hose radii (1 mm for the thesis hose)
 REACH_RADII = 1.5  # the longest reach a list is made for, in hose radii: the barrier's and a short step's
@@ -54,6 +54,7 @@ class _List:
     reaches: np.ndarray
     segments: np.ndarray
     leaves: np.ndarray
+    bounds: np.ndarray  # each pair's leaf bound where the list was made (bounding_volumes.leaf_bounds), mm
     served: int = 0
 
 
@@ -87,14 +88,14 @@ class LeafLists:
         if (kept is not None and kept.lower is tree[0] and kept.starts.shape == starts.shape
                 and np.array_equal(kept.roots, roots)):
             holds, segments, leaves = filtered(starts, ends, reaches, kept.starts, kept.ends, kept.reaches,
-                                               kept.segments, kept.leaves, tree[0], tree[1])
+                                               kept.segments, kept.leaves, kept.bounds, tree[0], tree[1])
             if holds:
                 kept.served += 1
                 return segments, leaves
         if not np.max(reaches) <= largest:
             return None
         if kept is not None:  # it holds no more: judge it
-            del self._lists[search]
+            self._lists.pop(search, None)
             failed = 0 if kept.served else self._failed.get(search, 0) + 1
             self._failed[search] = failed
             self._waiting[search] = min(2 ** failed - 1, MOST_WAITING)
@@ -103,28 +104,34 @@ class LeafLists:
             return None
         grown = np.where(reaches > 0.0, reaches + margin, reaches)
         segments, leaves = walk(starts, ends, grown, *tree, roots)
-        self._lists[search] = _List(tree[0], roots.copy(), starts.copy(), ends.copy(), grown, segments, leaves)
-        return filtered(starts, ends, reaches, starts, ends, grown, segments, leaves, tree[0], tree[1])[1:]
+        bounds = leaf_bounds(starts, ends, segments, leaves, tree[0], tree[1])
+        self._lists[search] = _List(tree[0], roots.copy(), starts.copy(), ends.copy(), grown, segments, leaves,
+                                    bounds)
+        return filtered(starts, ends, reaches, starts, ends, grown, segments, leaves, bounds, tree[0], tree[1])[1:]
 
 
 @njit(cache=True)
-def filtered(starts, ends, reaches, list_starts, list_ends, list_reaches, segments, leaves, lower, upper):
+def filtered(starts, ends, reaches, list_starts, list_ends, list_reaches, segments, leaves, bounds, lower, upper):
     """(holds, segments, leaves): whether the list (made for list_starts, list_ends with list_reaches, mm) holds every
-    leaf within reaches (mm) of the chain starts, ends, and if so those of its pairs that are (the walk's leaf test)."""
+    leaf within reaches (mm) of the chain starts, ends, and if so those of its pairs that are (the walk's leaf test).
+    bounds: each pair's leaf bound (mm) where the list was made; it has fallen by at most twice the move since, so a
+    pair whose bound less that is still at or above the reach fails the leaf test without it being evaluated."""
+    moves = np.zeros(starts.shape[0])
     for i in range(starts.shape[0]):
         if reaches[i] > 0.0:
             start_move = (starts[i, 0] - list_starts[i, 0]) ** 2 + (starts[i, 1] - list_starts[i, 1]) ** 2 + (
                 starts[i, 2] - list_starts[i, 2]) ** 2
             end_move = (ends[i, 0] - list_ends[i, 0]) ** 2 + (ends[i, 1] - list_ends[i, 1]) ** 2 + (
                 ends[i, 2] - list_ends[i, 2]) ** 2
-            needed = reaches[i] + 2.0 * math.sqrt(max(start_move, end_move))
+            moves[i] = 2.0 * math.sqrt(max(start_move, end_move))
+            needed = reaches[i] + moves[i]
             if not needed + SLACK * (1.0 + needed) <= list_reaches[i]:
                 return False, segments[:0], leaves[:0]
     keep = np.zeros(segments.shape[0], np.bool_)
     for p in range(segments.shape[0]):
         i, node = segments[p], leaves[p]
         reach = reaches[i]
-        if not reach > 0.0:
+        if not reach > 0.0 or bounds[p] - moves[i] >= reach + SLACK * (1.0 + reach + bounds[p]):
             continue
         apart = False  # the walk's box test (bounding_volumes.chain_tree, leaves_within), in its own arithmetic
         for k in range(3):
