@@ -207,15 +207,7 @@ def leaf_within(p, q, lower, upper, reach):
     rejects first).  Where the pieces' ends move by at most m, each bound changes by at most 2 m (leaf_lists.py)."""
     if not box_gap(p, q, lower, upper) < reach:
         return False
-    if p[0] == q[0] and p[1] == q[1] and p[2] == q[2]:
-        return True
-    for piece in range(LEAF_PIECES):
-        s, e = piece / LEAF_PIECES, (piece + 1) / LEAF_PIECES
-        a = (p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1]), p[2] + s * (q[2] - p[2]))
-        b = (p[0] + e * (q[0] - p[0]), p[1] + e * (q[1] - p[1]), p[2] + e * (q[2] - p[2]))
-        if box_gap(a, b, lower, upper) < reach:
-            return True
-    return False
+    return _is_point(p, q) or _pieces_gap(p, q, lower, upper, reach) < reach
 
 
 @njit(cache=True)
@@ -228,17 +220,28 @@ def leaf_bounds(starts, ends, segments, leaves, lower, upper):
         i, node = segments[pair], leaves[pair]
         p, q = point_of(starts, i), point_of(ends, i)
         whole = box_gap(p, q, lower[node], upper[node])
-        if p[0] == q[0] and p[1] == q[1] and p[2] == q[2]:
-            bounds[pair] = whole
-            continue
-        smallest = math.inf
-        for piece in range(LEAF_PIECES):
-            s, e = piece / LEAF_PIECES, (piece + 1) / LEAF_PIECES
-            a = (p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1]), p[2] + s * (q[2] - p[2]))
-            b = (p[0] + e * (q[0] - p[0]), p[1] + e * (q[1] - p[1]), p[2] + e * (q[2] - p[2]))
-            smallest = min(smallest, box_gap(a, b, lower[node], upper[node]))
-        bounds[pair] = max(whole, smallest)
+        bounds[pair] = whole if _is_point(p, q) else max(whole, _pieces_gap(p, q, lower[node], upper[node], -math.inf))
     return bounds
+
+
+@njit(cache=True, inline="always")
+def _is_point(p, q):
+    # whether the segment pq is a point (a station)
+    return p[0] == q[0] and p[1] == q[1] and p[2] == q[2]
+
+
+@njit(cache=True, inline="always")
+def _pieces_gap(p, q, lower, upper, enough):
+    # the smallest box_gap (mm) of the LEAF_PIECES equal pieces of segment pq, or the first one below `enough`
+    smallest = math.inf
+    for piece in range(LEAF_PIECES):
+        s, e = piece / LEAF_PIECES, (piece + 1) / LEAF_PIECES
+        a = (p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1]), p[2] + s * (q[2] - p[2]))
+        b = (p[0] + e * (q[0] - p[0]), p[1] + e * (q[1] - p[1]), p[2] + e * (q[2] - p[2]))
+        smallest = min(smallest, box_gap(a, b, lower, upper))
+        if smallest < enough:
+            break
+    return smallest
 
 
 @njit(cache=True, inline="always")
