@@ -137,3 +137,25 @@ def test_station_gaps_are_those_of_the_search_from_the_root_to_the_bit():
         assert np.array_equal(mesh.station_gaps(moved, 1.0, bounds), expected)
         near += int(np.sum(expected < bounds))
     assert near > 100
+
+
+def test_mesh_pairs_from_the_lists_are_those_of_a_mesh_without_them():
+    """MeshArrays.pairs of a hose creeping over a faceted drum (its lists kept from search to search) against the
+    same mesh copied afresh for each search (dataclasses.replace: no lists), the pairs and gaps to the bit."""
+    from dataclasses import replace
+
+    from test_contact_mesh import _faceted_drum
+
+    rng = np.random.default_rng(13)
+    vertices, faces = _faceted_drum(48, rows=12)
+    mesh = pack_meshes([(vertices, faces)], [0])
+    nodes = np.cumsum(np.vstack([[[-60.0, -30.0, 38.0]], 6.0 * rng.standard_normal((30, 3)) + [4.0, 2.0, 0.0]]), axis=0)
+    found = 0
+    for search in range(150):
+        moved = nodes + rng.normal(scale=0.02, size=nodes.shape) + [0.0, 0.0, -0.02 * search]
+        cutoffs = 0.5 if search % 3 else (np.full(31, 0.3), rng.uniform(0.0, 1.0, 30))
+        listed = mesh.pairs(moved, 1.0, cutoffs, every_feature=search % 2 == 0)
+        fresh = replace(mesh).pairs(moved, 1.0, cutoffs, every_feature=search % 2 == 0)
+        assert all(np.array_equal(a, b) for a, b in zip(listed, fresh)), search
+        found += listed[0].size
+    assert found > 200 and mesh.leaf_lists._lists
