@@ -99,8 +99,8 @@ from hoseline.model.obstacles import has_area
 FLAT = 1e-9  # sine of the angle below which two triangles sharing an edge lie in one plane
 TIE_DIRECTIONS = np.array([[0.5257, 0.7236, 0.4472], [0.8017, -0.2673, 0.5345]])  # w, and w' for an edge along w (any fixed)
 COVERED, JOINT, CORNER = 0, 1, 2  # MeshArrays.corners: what an edge's end is
-LISTED_TRIANGLES = 2000  # meshes with fewer triangles are walked at every search, without leaf lists (a box lifted
-# through the hose, tests/test_sweep_moving_contact.py: 0.39-0.40 s, 0.45 with lists)
+LISTED_TRIANGLES = 2000  # meshes with fewer triangles are walked at every search in one call, without leaf lists (a
+# box lifted through the hose, tests/test_sweep_moving_contact.py: 0.37 s, 0.45 with lists, 0.36 before them)
 
 
 def _empty_tree():
@@ -172,6 +172,11 @@ class MeshArrays:
         if np.isscalar(cutoffs):
             cutoffs = (np.full(nodes.shape[0], float(cutoffs)), np.full(nodes.shape[0] - 1, float(cutoffs)))
         station_cutoffs, segment_cutoffs = cutoffs
+        if self.triangles.shape[0] < LISTED_TRIANGLES:  # a walk down a small tree costs less than keeping a list
+            return walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles,
+                                     self.features, self.flat_edges, self.flat_sides, *self.triangle_tree,
+                                     self.triangle_roots, self.edges, self.corners, self.joints, *self.edge_tree,
+                                     self.edge_roots, every_feature)
         stations = nodes[1:]
         near_stations = self._leaves("stations", stations, stations, station_cutoffs[1:] + hose_radius, hose_radius)
         near_segments = self._leaves("segments", nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, hose_radius)
@@ -206,11 +211,9 @@ class MeshArrays:
     def _leaves(self, search: str, starts: np.ndarray, ends: np.ndarray, reaches: np.ndarray, hose_radius: float):
         """(segments, leaves) within reaches (mm) of the chain starts, ends (mm) in the triangle tree (search
         "stations") or the edge tree ("segments"): from a leaf list (leaf_lists.py) where one holds or is made, else
-        one walk (_leaves_in_order)."""
+        one walk (_leaves_in_order).  For a mesh of LISTED_TRIANGLES or more (pairs walks a smaller one itself)."""
         tree, roots = (self.triangle_tree, self.triangle_roots) if search == "stations" else (self.edge_tree,
                                                                                               self.edge_roots)
-        if self.triangles.shape[0] < LISTED_TRIANGLES:  # a walk down a small tree costs less than keeping a list
-            return _leaves_in_order(starts, ends, reaches, *tree, roots)
         listed = self.leaf_lists.leaves(search, starts, ends, reaches, tree, roots, MARGIN_RADII * hose_radius,
                                         _leaves_in_order, REACH_RADII * hose_radius)
         return listed if listed is not None else _leaves_in_order(starts, ends, reaches, *tree, roots)
@@ -425,6 +428,22 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
             gaps.append(gap)
     return (np.array(kinds, dtype=np.int64), np.array(first, dtype=np.int64), np.array(second, dtype=np.int64),
             np.array(gaps, dtype=np.float64))
+
+
+@njit(cache=True)
+def walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges,
+                      flat_sides, t_lower, t_upper, t_children, t_ranges, t_roots, edges, corners, joints, e_lower,
+                      e_upper, e_children, e_ranges, e_roots, every_feature):
+    """mesh_pairs with the leaves found by one walk down each tree (the triangles': t_*, the edges': e_*), in one
+    call: for a small mesh, whose walks cost less than the calls around a leaf list."""
+    stations = nodes[1:]
+    near_stations = _leaves_in_order(stations, stations, station_cutoffs[1:] + hose_radius, t_lower, t_upper,
+                                     t_children, t_ranges, t_roots)
+    near_segments = _leaves_in_order(nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, e_lower, e_upper,
+                                     e_children, e_ranges, e_roots)
+    return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges,
+                      flat_sides, t_ranges, near_stations[0], near_stations[1], edges, corners, joints, e_ranges,
+                      near_segments[0], near_segments[1], every_feature)
 
 
 @njit(cache=True)

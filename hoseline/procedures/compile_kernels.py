@@ -45,7 +45,7 @@ from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model import Hose, Mount, Problem
 from hoseline.model.clips import Clip
 from hoseline.model.motion import Pose
-from hoseline.model.obstacles import Box, Cylinder, Plane, Sphere
+from hoseline.model.obstacles import Box, Cylinder, Mesh, Plane, Sphere
 from hoseline.model.stiffeners import thesis_preset
 from hoseline.procedures.contact.placement import problem_contact_model
 from hoseline.procedures.geometry.clearance import TriangleIndex
@@ -61,9 +61,23 @@ SMALL_PLACEMENT = Problem(
 )
 
 
+
+
+def _grid_sheet(cells: int, corner: list[float], size: float) -> Mesh:
+    """A square sheet of cells x cells squares, 2 triangles each, `size` mm wide, in a plane z = corner[2]."""
+    ticks = np.linspace(0.0, size, cells + 1)
+    x, y = np.meshgrid(ticks, ticks, indexing="ij")
+    vertices = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)]) + corner
+    i, j = np.meshgrid(np.arange(cells), np.arange(cells), indexing="ij")
+    a = (i * (cells + 1) + j).ravel()
+    faces = np.vstack([np.column_stack([a, a + cells + 1, a + 1]), np.column_stack([a + 1, a + cells + 1, a + cells + 2])])
+    return Mesh(vertices, faces, "sheet")
+
+
 # A heavy hose, too long to hang clear of the floor below its mounts: the place phase loses stability and the
 # hose snaps down onto the floor (the contact Newton, its downhill mode); the other obstacles lie out of reach,
-# which still compiles their kernels (the argument types are those of any contact model).
+# which still compiles their kernels (the argument types are those of any contact model): the sheet of 2048
+# triangles those of the leaf lists (mechanics/contact_mesh.LISTED_TRIANGLES), the box those of a small mesh.
 CONTACT_PLACEMENT = Problem(
     Hose(length=400.0, outer_diameter=8.0, bending_stiffness=500.0, torsional_stiffness=385.0, mass_per_length=0.5,
          segments=16),
@@ -74,7 +88,8 @@ CONTACT_PLACEMENT = Problem(
     contact=(Plane(np.zeros(3), np.array([0.0, 0.0, 1.0]), "floor"),
              Sphere(np.array([0.0, 500.0, 0.0]), 10.0, "sphere"),
              Cylinder(np.array([0.0, -500.0, 0.0]), np.array([100.0, -500.0, 0.0]), 10.0, "cylinder"),
-             Box(np.array([500.0, 0.0, 50.0]), np.array([20.0, 20.0, 20.0]), name="box")),
+             Box(np.array([500.0, 0.0, 50.0]), np.array([20.0, 20.0, 20.0]), name="box"),
+             _grid_sheet(32, [-500.0, -500.0, 600.0], 100.0)),
     self_contact=True,
 )
 
