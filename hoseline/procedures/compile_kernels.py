@@ -61,8 +61,6 @@ SMALL_PLACEMENT = Problem(
 )
 
 
-
-
 def _grid_sheet(cells: int, corner: list[float], size: float) -> Mesh:
     """A square sheet of cells x cells squares, 2 triangles each, `size` mm wide, in a plane z = corner[2]."""
     ticks = np.linspace(0.0, size, cells + 1)
@@ -119,6 +117,9 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
     if contact:
         with compiling("contact"):
             solve(CONTACT_PLACEMENT, estimate_error=False)
+            # without the sheet, its meshes are small: their searches walk the trees in one call (walked_mesh_pairs)
+            small = problem_contact_model(replace(CONTACT_PLACEMENT, contact=CONTACT_PLACEMENT.contact[:-1]))
+            small.pairs(np.linspace([0.0, 0.0, 100.0], [150.0, 0.0, 100.0], 17), small.activation)
             model = problem_contact_model(CONTACT_PLACEMENT)  # a sweep's obstacles moved with their bodies
             moved_model(model, [Pose(position=np.array([1.0, 0.0, 0.0]))] * len(model.names))
 
