@@ -199,24 +199,33 @@ class MeshArrays:
         none is nearer: np.min(segment_gaps(nodes, nodes, ...)[0], axis=0) to the bit, but from the leaves near the
         stations (leaf_lists.py), not a search of each tree from its root per station."""
         stations = nodes[1:]
-        listed = None if self.triangles.shape[0] < LISTED_TRIANGLES else self.leaf_lists.leaves(
-            "stations", stations, stations, bounds[1:] + hose_radius, self.triangle_tree, self.triangle_roots,
-            MARGIN_RADII * hose_radius, _leaves_in_order, REACH_RADII * hose_radius)
+        listed = None if self.triangles.shape[0] < LISTED_TRIANGLES else self._listed(
+            "stations", stations, stations, bounds[1:] + hose_radius, hose_radius)
         if listed is None:  # a small mesh, or bounds too long for a list: the search from the root is sooner done
             return np.min(self.segment_gaps(nodes, nodes, hose_radius, bounds)[0], axis=0)
         first = np.min(self.segment_gaps(nodes[:1], nodes[:1], hose_radius, bounds[:1])[0], axis=0)  # the held one
         return np.concatenate([first, nearest_in_leaves(stations, bounds[1:], hose_radius, *listed, self.triangles,
                                                         self.normals, *self.triangle_tree[:2], self.triangle_tree[3])])
 
+    def _tree(self, search: str) -> tuple[tuple, np.ndarray]:
+        """((lower, upper, children, ranges), roots) of the triangle trees (search "stations") or the edge trees
+        ("segments")."""
+        return (self.triangle_tree, self.triangle_roots) if search == "stations" else (self.edge_tree, self.edge_roots)
+
+    def _listed(self, search: str, starts: np.ndarray, ends: np.ndarray, reaches: np.ndarray, hose_radius: float):
+        """(segments, leaves) within reaches (mm) of the chain starts, ends (mm) in the tree of `search` (_tree), from
+        a leaf list (leaf_lists.py) where one holds or is made; None where none is (the caller walks or searches)."""
+        tree, roots = self._tree(search)
+        return self.leaf_lists.leaves(search, starts, ends, reaches, tree, roots, MARGIN_RADII * hose_radius,
+                                      _leaves_in_order, REACH_RADII * hose_radius)
+
     def _leaves(self, search: str, starts: np.ndarray, ends: np.ndarray, reaches: np.ndarray, hose_radius: float):
-        """(segments, leaves) within reaches (mm) of the chain starts, ends (mm) in the triangle tree (search
-        "stations") or the edge tree ("segments"): from a leaf list (leaf_lists.py) where one holds or is made, else
-        one walk (_leaves_in_order).  For a mesh of LISTED_TRIANGLES or more (pairs walks a smaller one itself)."""
-        tree, roots = (self.triangle_tree, self.triangle_roots) if search == "stations" else (self.edge_tree,
-                                                                                              self.edge_roots)
-        listed = self.leaf_lists.leaves(search, starts, ends, reaches, tree, roots, MARGIN_RADII * hose_radius,
-                                        _leaves_in_order, REACH_RADII * hose_radius)
-        return listed if listed is not None else _leaves_in_order(starts, ends, reaches, *tree, roots)
+        """_listed, or where no list holds, one walk (_leaves_in_order)."""
+        listed = self._listed(search, starts, ends, reaches, hose_radius)
+        if listed is not None:
+            return listed
+        tree, roots = self._tree(search)
+        return _leaves_in_order(starts, ends, reaches, *tree, roots)
 
     def smallest_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float, first_bound: float) -> np.ndarray:
         """(K,) the smallest gap (mm) of the capsules of `hose_radius` about the segments from `starts` to `ends` to
