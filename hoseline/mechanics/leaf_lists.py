@@ -62,9 +62,9 @@ class LeafLists:
     """The leaf lists of one set of meshes, by search ("stations", "segments"); see the module doc.
 
     A list that answers no later search (the hose moved on by more than the margin at once: a long
-    Newton step, a placement path) cost a wider walk for nothing: the next list of that search is
-    then made only after as many plain walks as lists have failed in a row, doubled each time up to
-    MOST_WAITING, so that a placement pays little for lists and a sweep keeps them.
+    Newton step, a placement path) cost a wider walk for nothing: after k such lists of a search in
+    a row, the next one is made only after 2^k - 1 plain walks (1, 3, 7, 15, then MOST_WAITING), so
+    that a placement pays little for lists and a sweep keeps them.
     """
 
     def __init__(self) -> None:
