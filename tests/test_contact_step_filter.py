@@ -11,11 +11,12 @@ helix whose turns nearly touch (self-contact) beside a floor and a capsule:
 import numpy as np
 import pytest
 
-from hoseline.mechanics.contact import SEGMENT_SEGMENT, listed_gaps
+from hoseline.mechanics.contact import SEGMENT_CAPSULE, SEGMENT_SEGMENT, STATION_PLANE, listed_gaps
 from hoseline.mechanics.contact_newton import SAFE_FRACTION, ContactModel, step_filter
 from hoseline.mechanics.newton import RodProperties, apply_step
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.mechanics.rotations import frame_from_tangent
+from hoseline.mechanics.step_pairs import watched_pairs
 
 RADIUS, H = 1.0, 1.0  # mm
 
@@ -82,6 +83,10 @@ def test_admits_decides_as_the_exact_gaps_of_every_pair():
     kinds, first, second, now = model.pairs(centerline(state.frames, clamps.start_point, H), np.inf)
     decisions, mixed = set(), False
     steps = [size * rng.standard_normal(3 * props.segments) for size in (2e-3, 1e-2, 3e-2, 0.1, 0.3) for _ in range(4)]
+    for size in (0.1, 0.15):  # the first six segments turned: the hose beyond them swings near the floor
+        for _ in range(3):
+            steps.append(np.zeros(3 * props.segments))
+            steps[-1][:18] = size * rng.standard_normal(18)
     for hinge in (6, 12, 30):  # one segment turned by 1.2 rad: the hose beyond it moves as a body, by 1.13 h
         for axis in np.vstack([np.eye(3), -np.eye(3)]):
             steps.append(np.zeros(3 * props.segments))
@@ -90,7 +95,7 @@ def test_admits_decides_as_the_exact_gaps_of_every_pair():
         watch = step_filter(props, clamps, state, step, model)
         watched = watch.pairs[0]
         mixed |= bool(np.any(watched == SEGMENT_SEGMENT) and np.any(watched != SEGMENT_SEGMENT))
-        for alpha in (1.0, 0.25):
+        for alpha in (watch.limit, 0.25 * watch.limit):  # no trial goes beyond the limit
             trial = apply_step(props, clamps, state, alpha * step, np.zeros(3))
             nodes = centerline(trial.frames, clamps.start_point, H)
             exact = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules,
@@ -113,3 +118,37 @@ def test_the_smallest_self_gap_is_that_of_every_pair():
         every = _self_gaps(nodes, model, first, second)
         assert model.smallest_gaps(nodes)["self"] == pytest.approx(float(np.min(every)), abs=1e-12)
         assert model.smallest_gap(nodes) <= float(np.min(every))
+
+
+def test_the_watched_pairs_are_those_of_every_pair_listed_and_filtered():
+    """step_pairs.watched_pairs skips the exact distance of self pairs its midpoint bound clears: the same limit
+    as every pair below the cutoff (contact.pair_gaps) gives, and the same pairs and gaps as filtering them by
+    the move cut to that limit, on steps from tiny to a hinge that swings half the helix."""
+    rng = np.random.default_rng(11)
+    props, clamps, state, model = _helix_beside_obstacles(rng)
+    nodes = centerline(state.frames, clamps.start_point, H)
+    shrink = 1.0 - SAFE_FRACTION
+    steps = [size * rng.standard_normal(3 * props.segments) for size in (0.0, 1e-3, 1e-2, 0.1, 0.5) for _ in range(3)]
+    steps.append(np.zeros(3 * props.segments))
+    steps[-1][3 * 20:3 * 20 + 3] = (0.0, 1.2, 0.0)
+    counts = set()
+    for step in steps:
+        reach = np.concatenate([[0.0], H * np.cumsum(np.linalg.norm(step.reshape(-1, 3), axis=1))])
+        cutoff = float(reach[-1]) + model.activation
+        kinds, first, second, gaps = model.pairs(nodes, cutoff)
+        bound = np.where(kinds == STATION_PLANE, reach[first], reach[np.minimum(first + 1, props.segments)])
+        bound = np.where(kinds == SEGMENT_SEGMENT, reach[np.minimum(second + 1, props.segments)] - reach[first], bound)
+        thickness = np.where(kinds == SEGMENT_SEGMENT, 2 * RADIUS, np.inf)
+        thickness[kinds == SEGMENT_CAPSULE] = 2 * model.capsules[second[kinds == SEGMENT_CAPSULE], 6]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            limit = min(1.0, float(np.min(np.where(bound > 0, (gaps + thickness) / bound, np.inf), initial=np.inf)))
+        keep = shrink * gaps < limit * bound
+        found = watched_pairs(nodes, RADIUS, model.planes, model.balls, model.capsules, model.self_exclusion, reach,
+                              cutoff, shrink)
+        mine = np.lexsort(found[2::-1])  # in any order (a long step's self pairs are not found by the sort and sweep)
+        theirs = np.lexsort((second[keep], first[keep], kinds[keep]))
+        for got, expected in zip(found[:4], (kinds[keep], first[keep], second[keep], gaps[keep])):
+            np.testing.assert_array_equal(got[mine], expected[theirs])
+        assert found[4] == limit
+        counts.add(int(np.count_nonzero(keep)))
+    assert min(counts) == 0 and max(counts) > 50  # from nothing watched to many pairs

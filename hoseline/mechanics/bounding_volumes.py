@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.proximity import segment_plane_gap, segment_triangle_distance
+from hoseline.mechanics.proximity import corner_of, point_of, segment_plane_gap, segment_triangle_distance
 
 LEAF_SIZE = 4
 LEAF_PIECES = 4  # of a segment, for the leaf test of leaves_within (leaf_within)
@@ -143,7 +143,8 @@ def leaves_within(starts, ends, reaches, chain, lower, upper, children, ranges, 
         on_leaf, on_chain_leaf = children[node, 0] < 0, link >= size
         if on_leaf and on_chain_leaf:
             i = link - size
-            if leaf_within(point_of(starts, i), point_of(ends, i), lower[node], upper[node], reaches[i]):
+            low, high = point_of(lower, node), point_of(upper, node)  # tuples: a row's view costs a reference count
+            if leaf_within(point_of(starts, i), point_of(ends, i), low, high, reaches[i]):
                 segments.append(i)
                 leaves.append(node)
             continue
@@ -163,15 +164,9 @@ def leaves_within(starts, ends, reaches, chain, lower, upper, children, ranges, 
 
 
 @njit(cache=True, inline="always")
-def point_of(points, i):
-    """Row i of an (n, 3) array as a tuple."""
-    return (points[i, 0], points[i, 1], points[i, 2])
-
-
-@njit(cache=True, inline="always")
 def corners_of(triangles, t):
     """The three corners of triangle t of an (F, 3, 3) array, as tuples."""
-    return point_of(triangles[t], 0), point_of(triangles[t], 1), point_of(triangles[t], 2)
+    return corner_of(triangles, t, 0), corner_of(triangles, t, 1), corner_of(triangles, t, 2)
 
 
 @njit(cache=True)
@@ -219,8 +214,9 @@ def leaf_bounds(starts, ends, segments, leaves, lower, upper):
     for pair in range(segments.shape[0]):
         i, node = segments[pair], leaves[pair]
         p, q = point_of(starts, i), point_of(ends, i)
-        whole = box_gap(p, q, lower[node], upper[node])
-        bounds[pair] = whole if _is_point(p, q) else max(whole, _pieces_gap(p, q, lower[node], upper[node], -math.inf))
+        low, high = point_of(lower, node), point_of(upper, node)
+        whole = box_gap(p, q, low, high)
+        bounds[pair] = whole if _is_point(p, q) else max(whole, _pieces_gap(p, q, low, high, -math.inf))
     return bounds
 
 
@@ -258,7 +254,7 @@ def segment_search(p, q, bound, triangles, normals, lower, upper, children, rang
     while top > 0:
         top -= 1
         node = stack[top]
-        if box_gap(p, q, lower[node], upper[node]) >= best:
+        if box_gap(p, q, point_of(lower, node), point_of(upper, node)) >= best:
             continue
         if children[node, 0] < 0:
             first, count = ranges[node, 0], ranges[node, 1]
@@ -271,7 +267,8 @@ def segment_search(p, q, bound, triangles, normals, lower, upper, children, rang
                     best, best_position, on_segment, on_triangle = d, position, x, y
             continue
         left, right = children[node, 0], children[node, 1]
-        if box_gap(p, q, lower[left], upper[left]) <= box_gap(p, q, lower[right], upper[right]):
+        left_gap = box_gap(p, q, point_of(lower, left), point_of(upper, left))
+        if left_gap <= box_gap(p, q, point_of(lower, right), point_of(upper, right)):
             stack[top], stack[top + 1] = right, left  # the nearer child is opened first
         else:
             stack[top], stack[top + 1] = left, right

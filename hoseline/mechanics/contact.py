@@ -42,6 +42,7 @@ import math
 import numpy as np
 from numba import njit
 
+from hoseline.mechanics.proximity import corner_of, point_of
 from hoseline.mechanics.self_pairs import near_segment_pairs
 
 STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT, STATION_TRIANGLE, SEGMENT_EDGE = 0, 1, 2, 3, 4, 5
@@ -142,31 +143,47 @@ def distance_terms(points, m, c, dc, free):
             f_x[3 * j + x] = 2.0 * c[j] * r[x]
             for l in range(m):
                 f_xx[3 * j + x, 3 * l + x] = 2.0 * c[j] * c[l]
-    index = np.zeros(2, np.int64)
     nf = 0
+    k0 = k1 = 0  # the free parameters
     for k in range(2):
         if free[k]:
-            index[nf] = k
+            if nf == 0:
+                k0 = k
+            else:
+                k1 = k
             nf += 1
     if nf > 0:
-        f_zz = np.zeros((nf, nf))
-        f_xz = np.zeros((n, nf))
-        for a in range(nf):
-            ka = index[a]
-            for b in range(nf):
-                f_zz[a, b] = 2.0 * _dot3(rz[:, ka], rz[:, index[b]])
-            for j in range(m):
-                for x in range(3):
-                    f_xz[3 * j + x, a] = 2.0 * (dc[j, ka] * r[x] + c[j] * rz[x, ka])
+        # f_xx -= f_xz f_zz^-1 f_xz^T, by hand: at most 12 x 2, where a BLAS call per pair cost more than the sums
+        f_xz = np.empty((n, 2))
+        for a, ka in enumerate((k0, k1)):
+            if a < nf:
+                for j in range(m):
+                    for x in range(3):
+                        f_xz[3 * j + x, a] = 2.0 * (dc[j, ka] * r[x] + c[j] * rz[x, ka])
+        f_00 = 2.0 * (rz[0, k0] * rz[0, k0] + rz[1, k0] * rz[1, k0] + rz[2, k0] * rz[2, k0])  # f_zz
         if nf == 1:
-            inverse = np.array([[1.0 / f_zz[0, 0]]])
+            for p in range(n):
+                t0 = f_xz[p, 0] / f_00
+                for q in range(n):
+                    f_xx[p, q] -= t0 * f_xz[q, 0]
         else:
-            det = f_zz[0, 0] * f_zz[1, 1] - f_zz[0, 1] * f_zz[1, 0]
-            inverse = np.array([[f_zz[1, 1], -f_zz[0, 1]], [-f_zz[1, 0], f_zz[0, 0]]]) / det
-        f_xx -= f_xz @ inverse @ f_xz.T
+            f_01 = 2.0 * (rz[0, k0] * rz[0, k1] + rz[1, k0] * rz[1, k1] + rz[2, k0] * rz[2, k1])
+            f_11 = 2.0 * (rz[0, k1] * rz[0, k1] + rz[1, k1] * rz[1, k1] + rz[2, k1] * rz[2, k1])
+            det = f_00 * f_11 - f_01 * f_01
+            for p in range(n):  # (f_xz f_zz^-1)[p] with f_zz^-1 = [[f_11, -f_01], [-f_01, f_00]] / det
+                t0 = (f_xz[p, 0] * f_11 - f_xz[p, 1] * f_01) / det
+                t1 = (f_xz[p, 1] * f_00 - f_xz[p, 0] * f_01) / det
+                for q in range(n):
+                    f_xx[p, q] -= t0 * f_xz[q, 0] + t1 * f_xz[q, 1]
     d = math.sqrt(f)
-    grad = f_x / (2.0 * d)
-    hess = f_xx / (2.0 * d) - np.outer(f_x, f_x) / (4.0 * d * d * d)
+    twice = 2.0 * d
+    cubed = 4.0 * d * d * d
+    grad = np.empty(n)
+    hess = np.empty((n, n))
+    for p in range(n):
+        grad[p] = f_x[p] / twice
+        for q in range(n):
+            hess[p, q] = f_xx[p, q] / twice - f_x[p] * f_x[q] / cubed
     return d, grad, hess
 
 
@@ -279,16 +296,23 @@ def _segment_distance(p, q, a, b):
 @njit(cache=True)
 def _pair_distance(kind, i, j, nodes, planes, balls, capsules, triangles, edges):
     # distance of one pair (mm; the obstacle primitive's radius not subtracted) and that radius
+    # the points as tuples (proximity.point_of): a row's view costs more than the distance
     if kind == STATION_PLANE:
-        return _dot3(planes[j, 3:], nodes[i] - planes[j, :3]), 0.0
+        x = point_of(nodes, i)
+        return (planes[j, 3] * (x[0] - planes[j, 0]) + planes[j, 4] * (x[1] - planes[j, 1])
+                + planes[j, 5] * (x[2] - planes[j, 2])), 0.0
     if kind == SEGMENT_BALL:
-        return _segment_distance(nodes[i], nodes[i + 1], balls[j, :3], balls[j, :3]), balls[j, 3]
+        centre = point_of(balls, j)
+        return _segment_distance(point_of(nodes, i), point_of(nodes, i + 1), centre, centre), balls[j, 3]
     if kind == SEGMENT_CAPSULE:
-        return _segment_distance(nodes[i], nodes[i + 1], capsules[j, :3], capsules[j, 3:6]), capsules[j, 6]
+        a, b = point_of(capsules, j), (capsules[j, 3], capsules[j, 4], capsules[j, 5])
+        return _segment_distance(point_of(nodes, i), point_of(nodes, i + 1), a, b), capsules[j, 6]
     if kind == SEGMENT_EDGE:
-        return _segment_distance(nodes[i], nodes[i + 1], edges[j, 0], edges[j, 1]), 0.0
+        return _segment_distance(point_of(nodes, i), point_of(nodes, i + 1), corner_of(edges, j, 0),
+                                 corner_of(edges, j, 1)), 0.0
     if kind == SEGMENT_SEGMENT:
-        return _segment_distance(nodes[i], nodes[i + 1], nodes[j], nodes[j + 1]), 0.0
+        return _segment_distance(point_of(nodes, i), point_of(nodes, i + 1), point_of(nodes, j),
+                                 point_of(nodes, j + 1)), 0.0
     points, m, c, _, _, _, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges)
     r = np.zeros(3)
     for k in range(m):

@@ -93,7 +93,7 @@ from hoseline.mechanics.contact import (
     triangle_parameters,
 )
 from hoseline.mechanics.leaf_lists import MARGIN_RADII, REACH_RADII, LeafLists
-from hoseline.mechanics.proximity import segment_plane_gap, segment_triangle_distance
+from hoseline.mechanics.proximity import corner_of, segment_plane_gap, segment_triangle_distance
 from hoseline.model.obstacles import has_area
 
 FLAT = 1e-9  # sine of the angle below which two triangles sharing an edge lie in one plane
@@ -404,17 +404,18 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
     for pair in range(found.shape[0]):
         k, leaf = found[pair] + 1, leaves[pair]
         cutoff = station_cutoffs[k]
+        x = point_of(nodes, k)
         for position in range(t_ranges[leaf, 0], t_ranges[leaf, 0] + t_ranges[leaf, 1]):
-            a, b, c = triangles[position, 0], triangles[position, 1], triangles[position, 2]
-            u, v, feature = triangle_parameters(nodes[k], a, b, c)
+            a, b, c = corners_of(triangles, position)
+            u, v, feature = triangle_parameters(x, a, b, c)
             distance = 0.0
             for j in range(3):
-                distance += (nodes[k, j] - ((1.0 - u - v) * a[j] + u * b[j] + v * c[j])) ** 2
+                distance += (x[j] - ((1.0 - u - v) * a[j] + u * b[j] + v * c[j])) ** 2
             gap = np.sqrt(distance) - hose_radius
             if not gap < cutoff:
                 continue
             if not every_feature and (feature == FACE or not (features[position] >> feature) & 1):
-                if not _takes(nodes[k], flat_edges[position], flat_sides[position]):
+                if not _takes(x, flat_edges[position], flat_sides[position]):
                     continue  # over a neighbour in its plane, or on the flat edge or vertex it gives to another
             kinds.append(STATION_TRIANGLE)
             first.append(k)
@@ -424,12 +425,12 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
     for pair in range(found.shape[0]):
         i, leaf = found[pair], leaves[pair]
         cutoff = segment_cutoffs[i]
+        p, q = point_of(nodes, i), point_of(nodes, i + 1)
         for position in range(e_ranges[leaf, 0], e_ranges[leaf, 0] + e_ranges[leaf, 1]):
-            a, b = edges[position, 0], edges[position, 1]
-            gap = segment_closest(nodes[i], nodes[i + 1], a, b)[0] - hose_radius
+            gap = segment_closest(p, q, corner_of(edges, position, 0), corner_of(edges, position, 1))[0] - hose_radius
             if not gap < cutoff:
                 continue
-            if not every_feature and not _edge_takes(nodes[i], nodes[i + 1], corners[position], joints[position]):
+            if not every_feature and not _edge_takes(p, q, corners[position], joints[position]):
                 continue  # beyond a straight joint, where the edge that continues this one takes the segment
             kinds.append(SEGMENT_EDGE)
             first.append(i)
@@ -544,7 +545,7 @@ def nearest_in_leaves(points, bounds, hose_radius, near, leaves, triangles, norm
     for pair in range(near.shape[0]):
         i, leaf = near[pair], leaves[pair]
         x = point_of(points, i)
-        if box_gap(x, x, lower[leaf], upper[leaf]) >= best[i]:  # nothing in it nearer than the nearest found
+        if box_gap(x, x, point_of(lower, leaf), point_of(upper, leaf)) >= best[i]:  # nothing nearer than the nearest
             continue
         for position in range(ranges[leaf, 0], ranges[leaf, 0] + ranges[leaf, 1]):
             a, b, c = corners_of(triangles, position)
@@ -579,11 +580,11 @@ def _squared_distance(x, y):
     return (x[0] - y[0]) ** 2 + (x[1] - y[1]) ** 2 + (x[2] - y[2]) ** 2
 
 
-@njit(cache=True)
-def _interpolate(start, end, tau, out):
-    # out = start + tau (end - start), in place (3,)
-    for k in range(3):
-        out[k] = start[k] + tau * (end[k] - start[k])
+@njit(cache=True, inline="always")
+def _between(start, end, tau):
+    # start + tau (end - start), as a tuple (mm)
+    return (start[0] + tau * (end[0] - start[0]), start[1] + tau * (end[1] - start[1]),
+            start[2] + tau * (end[2] - start[2]))
 
 
 @njit(cache=True)
@@ -599,10 +600,10 @@ def swept_edges_clear(start, end, first, second, edges, clearances, evaluations)
     Undecided after `evaluations` distances per pair: not clear (the step is then cut).
     """
     intervals = np.empty((evaluations + 2, 2))
-    pa, qa, pb, qb = np.empty(3), np.empty(3), np.empty(3), np.empty(3)  # the segment at tau_a and tau_b
     for pair in range(first.shape[0]):
-        i, a, b, clearance = first[pair], edges[second[pair], 0], edges[second[pair], 1], clearances[pair]
-        p0, q0, p1, q1 = start[i], start[i + 1], end[i], end[i + 1]
+        i, clearance = first[pair], clearances[pair]
+        a, b = corner_of(edges, second[pair], 0), corner_of(edges, second[pair], 1)
+        p0, q0, p1, q1 = point_of(start, i), point_of(start, i + 1), point_of(end, i), point_of(end, i + 1)
         move = math.sqrt(max(_squared_distance(p0, p1), _squared_distance(q0, q1)))  # the larger end's move
         start_pair = segment_closest(p0, q0, a, b)
         if start_pair[0] - move > clearance:  # cannot come nearer than its move: no search
@@ -612,10 +613,7 @@ def swept_edges_clear(start, end, first, second, edges, clearances, evaluations)
         while count > 0:
             count -= 1
             ta, tb = intervals[count]
-            _interpolate(p0, p1, ta, pa)
-            _interpolate(q0, q1, ta, qa)
-            _interpolate(p0, p1, tb, pb)
-            _interpolate(q0, q1, tb, qb)
+            pa, qa, pb, qb = _between(p0, p1, ta), _between(q0, q1, ta), _between(p0, p1, tb), _between(q0, q1, tb)
             # at the start, the pair just found (p0 + 0 (p1 - p0) is p0 to the bit)
             da, sa, ua = start_pair if ta == 0.0 else segment_closest(pa, qa, a, b)
             db, sb, ub = segment_closest(pb, qb, a, b)

@@ -42,8 +42,6 @@ from hoseline.mechanics.contact import (
     SEGMENT_SEGMENT,
     STATION_KINDS,
     STATION_PLANE,
-    STATION_TRIANGLE,
-    listed_gaps,
     node_terms,
     pair_gaps,
     rotation_terms,
@@ -58,6 +56,7 @@ from hoseline.mechanics.contact_solve import (
 )
 from hoseline.mechanics.newton import NewtonReport, RodProperties, apply_step, evaluate
 from hoseline.mechanics.rod import Clamps, RodState, centerline
+from hoseline.mechanics.step_pairs import pairs_clear, watched_pairs
 
 SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
 STALLED_STEP = 1.0 / 64.0  # of a Newton step: a step cut below it makes no headway (solve_with_contact's stall)
@@ -190,14 +189,13 @@ class ContactSystem:
 
     The Hessian is band + columns diag(signs) columns^T (contact_solve.py): band, the rod's and the
     contact's segment-load blocks (lower band storage); columns (n, r) and signs (r,) of +-1, the
-    station term.  dense() assembles it as one matrix by contact.rotation_terms, independently.
+    station term, worked out when first asked for (a trial of the line search that is refused needs
+    only the residual).  dense() assembles it as one matrix by contact.rotation_terms, independently.
     """
 
     energy: float
     grad: np.ndarray
     band: np.ndarray
-    columns: np.ndarray
-    signs: np.ndarray
     jac_t: np.ndarray
     constraint: np.ndarray
     residual: float
@@ -206,7 +204,27 @@ class ContactSystem:
     on_hose: np.ndarray
     on_other: np.ndarray
     gaps: np.ndarray
-    stations: tuple  # (rod band, frames, h, node_grad, node_hess, index): what dense() assembles from
+    stations: tuple  # (rod band, frames, h, node_grad, node_hess, index): what dense() and the columns come from
+    _low_rank: tuple | None = None
+
+    @property
+    def columns(self) -> np.ndarray:
+        """U (n, r) of the station term U diag(signs) U^T (contact_solve.low_rank_columns)."""
+        return self._columns_and_signs()[0]
+
+    @property
+    def signs(self) -> np.ndarray:
+        """sigma (r,) of +-1 of the station term U diag(signs) U^T."""
+        return self._columns_and_signs()[1]
+
+    def _columns_and_signs(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._low_rank is None:
+            _, frames, h, _, node_hess, index = self.stations
+            if index is None:
+                self._low_rank = np.zeros((self.grad.size, 0)), np.zeros(0)
+            else:
+                self._low_rank = low_rank_columns(frames, h, node_hess, *self.pairs, index, self.grad.size)
+        return self._low_rank
 
     def dense(self) -> np.ndarray:
         """The Hessian (n, n) assembled dense: the rod's band and contact.rotation_terms (suffix sums, O(N^2))."""
@@ -236,17 +254,16 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
     energy, node_grad, node_hess, forces, on_hose, on_other, gaps = model.terms(nodes, weight, kinds, first, second)
     grad = base.grad.copy()
     band = base.band.copy()
-    columns, signs, index = np.zeros((grad.size, 0)), np.zeros(0), None
+    index = None
     if kinds.size:
         index = rotation_index(props, clamps, state)
         grad += rotation_gradient_and_band(state.frames, h, node_grad, index, band)
-        columns, signs = low_rank_columns(state.frames, h, node_hess, kinds, first, second, index, grad.size)
     end_forces = np.linalg.norm(state.end_force) + np.linalg.norm(clip_forces(clamps, state))
     contact_total = float(np.sum(np.linalg.norm(forces, axis=1))) if kinds.size else 0.0
     weight_total = float(np.linalg.norm(clamps.line_weight)) * props.length
     scale = props.largest_stiffness / props.length + (end_forces + weight_total + contact_total) * props.length
     residual = max(float(np.max(np.abs(grad))) / scale, float(np.max(np.abs(base.constraint))) / props.length)
-    return ContactSystem(base.energy + energy, grad, band, columns, signs, base.jac_t, base.constraint, residual,
+    return ContactSystem(base.energy + energy, grad, band, base.jac_t, base.constraint, residual,
                          (kinds, first, second), forces, on_hose, on_other, gaps,
                          (base.band, state.frames, h, node_grad, node_hess, index))
 
@@ -280,8 +297,9 @@ class StepFilter:
     step, so a pair further apart than that (plus d_hat) cannot be reached and is not watched.
     limit: no primitive can pass through the body it faces: the fraction of the step is kept below
     (gap + thickness) / move bound, the thickness being the other body's diameter (infinite for a
-    plane).  A trial state is accepted only if every watched gap stays above SAFE_FRACTION of its
-    value (`admits`); as a primitive cannot cross a body without ending inside it or passing
+    plane); the pairs are watched for the step cut to the limit (step_pairs.watched_pairs).  A trial
+    state is accepted only if every watched gap stays above SAFE_FRACTION of its value (`admits`, at
+    no more than the limit); as a primitive cannot cross a body without ending inside it or passing
     through it, no accepted step crosses into penetration.
     Meshes are surfaces, not bodies (contact_mesh.py, step filter): the whole path of every station
     and of every segment near an edge must stay clear by SAFE_FRACTION of its gap now.  swept: (the
@@ -303,24 +321,16 @@ class StepFilter:
 
     def admits_centerline(self, nodes: np.ndarray, model: ContactModel, alpha: float) -> bool:
         """Whether the hose with centreline `nodes` (N+1, 3) mm, `alpha` times the move, keeps every watched gap above
-        SAFE_FRACTION of its value."""
+        SAFE_FRACTION of its value.  alpha may not exceed the limit: the pairs are watched for the move cut to it."""
+        if alpha > self.limit:
+            raise ValueError(f"a trial at {alpha} of the move, beyond the step filter's limit {self.limit}")
         if self.swept is not None and not self._paths_clear(nodes, model, alpha):
             return False
         if self.gaps.size == 0:
             return True
         kinds, first, second = self.pairs
-        # two segments' surfaces are at least their midpoints' distance less a segment length and a diameter
-        # apart: a self pair that this bound clears needs no exact distance (most of them, on a long hose)
-        uncertain = kinds != SEGMENT_SEGMENT
-        pairs = ~uncertain
-        if np.any(pairs):
-            midpoints = 0.5 * (nodes[:-1] + nodes[1:])
-            apart = np.linalg.norm(midpoints[first[pairs]] - midpoints[second[pairs]], axis=1)
-            segment = float(np.linalg.norm(nodes[1] - nodes[0]))  # every segment's length
-            uncertain[pairs] = apart - segment - 2.0 * model.hose_radius <= SAFE_FRACTION * self.gaps[pairs]
-        gaps = listed_gaps(nodes, model.hose_radius, model.planes, model.balls, model.capsules, model.mesh.triangles,
-                           model.mesh.edges, kinds[uncertain], first[uncertain], second[uncertain])
-        return bool(np.all(gaps > SAFE_FRACTION * self.gaps[uncertain]))
+        return bool(pairs_clear(nodes, model.hose_radius, model.planes, model.balls, model.capsules,
+                                model.mesh.triangles, model.mesh.edges, kinds, first, second, SAFE_FRACTION * self.gaps))
 
     def _paths_clear(self, nodes: np.ndarray, model: ContactModel, alpha: float) -> bool:
         """Whether every station and every segment near a mesh edge stays clear of the meshes along its path, by
@@ -369,7 +379,9 @@ def motion_filter(nodes: np.ndarray, turns: np.ndarray, start_move: float, h: fl
     """
     reach = start_move + np.concatenate([[0.0], h * np.cumsum(turns)])  # bound of station k's move
     cutoff = float(reach[-1]) + model.activation
-    kinds, first, second, gaps = model.pairs(nodes, cutoff, meshes=False)
+    kinds, first, second, gaps, limit = watched_pairs(nodes, model.hose_radius, model.planes, model.balls,
+                                                      model.capsules, model.self_exclusion, reach, cutoff,
+                                                      1.0 - SAFE_FRACTION)
     swept = None
     if model.mesh.count:
         station_cutoffs = reach + model.activation
@@ -377,26 +389,7 @@ def motion_filter(nodes: np.ndarray, turns: np.ndarray, start_move: float, h: fl
         station_gaps[station_gaps >= station_cutoffs] = math.inf  # out of reach
         bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
         swept = (nodes, station_gaps, bend)
-    if kinds.size == 0:
-        return StepFilter((kinds, first, second), gaps, 1.0, swept)
-    last = nodes.shape[0] - 1
-    at_stations = (kinds == STATION_PLANE) | (kinds == STATION_TRIANGLE)  # STATION_KINDS (np.isin costs 20 us)
-    bound = np.where(at_stations, reach[first], reach[np.minimum(first + 1, last)])
-    # segments i < j move relative to each other only by the turns of the segments from i to j
-    relative = reach[np.minimum(second + 1, last)] - reach[first]
-    bound = np.where(kinds == SEGMENT_SEGMENT, relative, bound)
-    thickness = np.full(kinds.size, np.inf)
-    thickness[kinds == SEGMENT_SEGMENT] = 2.0 * model.hose_radius
-    balls, capsules = kinds == SEGMENT_BALL, kinds == SEGMENT_CAPSULE
-    thickness[balls] = 2.0 * model.balls[second[balls], 3]
-    thickness[capsules] = 2.0 * model.capsules[second[capsules], 6]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        fractions = np.where(bound > 0.0, (gaps + thickness) / bound, np.inf)
-    # a pair whose gap its bound cannot shrink to SAFE_FRACTION of it is never refused by `admits` (and its
-    # fraction is above 1): not watched, which spares the trials the exact gaps of most self-contact pairs
-    watched = (1.0 - SAFE_FRACTION) * gaps < bound
-    return StepFilter((kinds[watched], first[watched], second[watched]), gaps[watched],
-                      float(min(1.0, np.min(fractions))), swept)
+    return StepFilter((kinds, first, second), gaps, limit, swept)
 
 
 def solve_with_contact(

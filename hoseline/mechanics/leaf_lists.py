@@ -138,5 +138,6 @@ def filtered(starts, ends, reaches, list_starts, list_ends, list_reaches, segmen
             if (lower[node, k] > max(starts[i, k], ends[i, k]) + reach
                     or upper[node, k] < min(starts[i, k], ends[i, k]) - reach):
                 apart = True
-        keep[p] = not apart and leaf_within(point_of(starts, i), point_of(ends, i), lower[node], upper[node], reach)
+        keep[p] = not apart and leaf_within(point_of(starts, i), point_of(ends, i), point_of(lower, node),
+                                            point_of(upper, node), reach)
     return True, segments[keep], leaves[keep]

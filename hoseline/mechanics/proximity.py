@@ -21,6 +21,19 @@ EPSILON = 1e-12
 
 
 @njit(cache=True, inline="always")
+def point_of(points, i):
+    """Row i of an (n, 3) array as a tuple (a view of the row would cost more than the arithmetic on it: its
+    reference count is taken and dropped by atomic operations)."""
+    return (points[i, 0], points[i, 1], points[i, 2])
+
+
+@njit(cache=True, inline="always")
+def corner_of(items, i, k):
+    """Point k of item i of an (n, m, 3) array (a triangle's corner, an edge's end) as a tuple."""
+    return (items[i, k, 0], items[i, k, 1], items[i, k, 2])
+
+
+@njit(cache=True, inline="always")
 def _sub(a, b):
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
