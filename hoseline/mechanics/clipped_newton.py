@@ -65,6 +65,12 @@ def _packed(clips: tuple) -> tuple:
     return arrays
 
 
+def segment_unknowns(segments: int, clamps: Clamps) -> np.ndarray:
+    """Index of each segment's first rotation unknown (N,) in the system of a rod with clips (clipped.unknown_layout)."""
+    nodes, _, _, _, roll_free = _packed(clamps.clips)
+    return unknown_layout(segments, nodes, roll_free, clamps.roll_free)[0]
+
+
 SHORTEST_STRETCHED = 0.2  # a segment stretched below this fraction of L/N: the step went too far (refused)
 
 

@@ -121,23 +121,29 @@ def triangle_parameters(x, a, b, c):
 
 
 @njit(cache=True)
-def distance_terms(points, m, c, dc, free):
+def distance_terms(points, m, c, dc, free, r, rz, f_x, f_xx, f_xz):
     """Distance d = |sum_j c_j X_j| at the closest parameters, its gradient (3m,) and Hessian (3m, 3m) in the points.
 
     points: (4, 3), the first m used.  c: (4,) coefficients at z*.  dc: (4, 2), dc[j, k] = dc_j/dz_k.
     free: (2,) bool, the parameters strictly inside their range (the others stay on their bound).
+    r (3,), rz (3, 2), f_x (12,), f_xx (12, 12), f_xz (12, 2): scratch, allocated once by the caller (a pair's
+    own arrays cost more than its arithmetic).  Returns d; the gradient is left in f_x[:3m], the Hessian in
+    f_xx[:3m, :3m].
     """
     n = 3 * m
-    r = np.zeros(3)
-    rz = np.zeros((3, 2))  # dr/dz_k
+    for x in range(3):
+        r[x] = 0.0
+        for k in range(2):
+            rz[x, k] = 0.0
     for j in range(m):
         for x in range(3):
             r[x] += c[j] * points[j, x]
             for k in range(2):
                 rz[x, k] += dc[j, k] * points[j, x]
     f = _dot3(r, r)
-    f_x = np.zeros(n)
-    f_xx = np.zeros((n, n))
+    for p in range(n):
+        for q in range(n):
+            f_xx[p, q] = 0.0
     for j in range(m):
         for x in range(3):
             f_x[3 * j + x] = 2.0 * c[j] * r[x]
@@ -154,7 +160,6 @@ def distance_terms(points, m, c, dc, free):
             nf += 1
     if nf > 0:
         # f_xx -= f_xz f_zz^-1 f_xz^T, by hand: at most 12 x 2, where a BLAS call per pair cost more than the sums
-        f_xz = np.empty((n, 2))
         for a, ka in enumerate((k0, k1)):
             if a < nf:
                 for j in range(m):
@@ -178,33 +183,38 @@ def distance_terms(points, m, c, dc, free):
     d = math.sqrt(f)
     twice = 2.0 * d
     cubed = 4.0 * d * d * d
-    grad = np.empty(n)
-    hess = np.empty((n, n))
-    for p in range(n):
-        grad[p] = f_x[p] / twice
+    for p in range(n):  # the Hessian first: it needs f_x
         for q in range(n):
-            hess[p, q] = f_xx[p, q] / twice - f_x[p] * f_x[q] / cubed
-    return d, grad, hess
+            f_xx[p, q] = f_xx[p, q] / twice - f_x[p] * f_x[q] / cubed
+    for p in range(n):
+        f_x[p] = f_x[p] / twice
+    return d
 
 
 @njit(cache=True)
-def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges):
+def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node):
     """The points, coefficients and free parameters of pair (kind, hose primitive i, obstacle primitive j).
 
-    Returns (points (4, 3), m, c (4,), dc (4, 2), free (2,), node (4,) the station of each point or
-    -1 for an obstacle point, radius of the obstacle primitive (mm)); not for STATION_PLANE.
-    For SEGMENT_SEGMENT, j is the second hose segment; for STATION_TRIANGLE, i is a station and the
-    columns of dc are the closest feature's free directions (triangle_parameters).
+    Fills points (4, 3), c (4,), dc (4, 2), free (2,) and node (4,), the station of each point or -1 for
+    an obstacle point (the caller's arrays, reused from pair to pair); returns (m, the points used, the
+    radius of the obstacle primitive (mm)); not for STATION_PLANE.  For SEGMENT_SEGMENT, j is the second
+    hose segment; for STATION_TRIANGLE, i is a station and the columns of dc are the closest feature's
+    free directions (triangle_parameters).
     """
-    points = np.zeros((4, 3))
-    c = np.zeros(4)
-    dc = np.zeros((4, 2))
-    free = np.zeros(2, np.bool_)
-    node = -np.ones(4, np.int64)
+    for a in range(4):
+        c[a] = 0.0
+        node[a] = -1
+        for x in range(3):
+            points[a, x] = 0.0
+        for k in range(2):
+            dc[a, k] = 0.0
+    free[0] = free[1] = False
     if kind == STATION_TRIANGLE:
-        a, b, t = triangles[j, 0], triangles[j, 1], triangles[j, 2]
-        u, v, feature = triangle_parameters(nodes[i], a, b, t)
-        points[0], points[1], points[2], points[3] = nodes[i], a, b, t
+        _set_point(points, 0, point_of(nodes, i))
+        for k in range(3):
+            _set_point(points, k + 1, corner_of(triangles, j, k))
+        u, v, feature = triangle_parameters(point_of(nodes, i), corner_of(triangles, j, 0), corner_of(triangles, j, 1),
+                                            corner_of(triangles, j, 2))
         node[0] = i
         c[0], c[1], c[2], c[3] = 1.0, -(1.0 - u - v), -u, -v
         if feature == FACE or feature == EDGE_AB:  # d r / d u
@@ -219,38 +229,44 @@ def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges):
         elif feature == EDGE_BC:  # along b to c
             dc[2, 0], dc[3, 0] = 1.0, -1.0
             free[0] = True
-        return points, 4, c, dc, free, node, 0.0
-    points[0] = nodes[i]
-    points[1] = nodes[i + 1]
+        return 4, 0.0
+    p, q = point_of(nodes, i), point_of(nodes, i + 1)
+    _set_point(points, 0, p)
+    _set_point(points, 1, q)
     node[0], node[1] = i, i + 1
-    p, q = nodes[i], nodes[i + 1]
     if kind == SEGMENT_BALL:
-        centre = balls[j, :3]
-        e = q - p
-        s = _clamp01(_dot3(centre - p, e) / _dot3(e, e))
-        points[2] = centre
+        centre = point_of(balls, j)
+        e = (q[0] - p[0], q[1] - p[1], q[2] - p[2])
+        s = _clamp01(_dot3((centre[0] - p[0], centre[1] - p[1], centre[2] - p[2]), e) / _dot3(e, e))
+        _set_point(points, 2, centre)
         c[0], c[1], c[2] = 1.0 - s, s, -1.0
         dc[0, 0], dc[1, 0] = -1.0, 1.0
         free[0] = 0.0 < s < 1.0
-        return points, 3, c, dc, free, node, balls[j, 3]
+        return 3, balls[j, 3]
     if kind == SEGMENT_CAPSULE:
-        a, b = capsules[j, :3], capsules[j, 3:6]
+        a, b = point_of(capsules, j), (capsules[j, 3], capsules[j, 4], capsules[j, 5])
         radius = capsules[j, 6]
     elif kind == SEGMENT_EDGE:
-        a, b = edges[j, 0], edges[j, 1]
+        a, b = corner_of(edges, j, 0), corner_of(edges, j, 1)
         radius = 0.0
     else:
-        a, b = nodes[j], nodes[j + 1]
+        a, b = point_of(nodes, j), point_of(nodes, j + 1)
         node[2], node[3] = j, j + 1
         radius = 0.0
     _, s, t = segment_closest(p, q, a, b)
-    points[2] = a
-    points[3] = b
+    _set_point(points, 2, a)
+    _set_point(points, 3, b)
     c[0], c[1], c[2], c[3] = 1.0 - s, s, -(1.0 - t), -t
     dc[0, 0], dc[1, 0], dc[2, 1], dc[3, 1] = -1.0, 1.0, 1.0, -1.0
     free[0] = 0.0 < s < 1.0
     free[1] = 0.0 < t < 1.0
-    return points, 4, c, dc, free, node, radius
+    return 4, radius
+
+
+@njit(cache=True, inline="always")
+def _set_point(points, row, x):
+    # points[row] = x for a tuple x
+    points[row, 0], points[row, 1], points[row, 2] = x[0], x[1], x[2]
 
 
 @njit(cache=True)
@@ -313,7 +329,9 @@ def _pair_distance(kind, i, j, nodes, planes, balls, capsules, triangles, edges)
     if kind == SEGMENT_SEGMENT:
         return _segment_distance(point_of(nodes, i), point_of(nodes, i + 1), point_of(nodes, j),
                                  point_of(nodes, j + 1)), 0.0
-    points, m, c, _, _, _, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges)
+    points, c = np.zeros((4, 3)), np.zeros(4)
+    m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, np.zeros((4, 2)),
+                              np.zeros(2, np.bool_), np.zeros(4, np.int64))
     r = np.zeros(3)
     for k in range(m):
         r += c[k] * points[k]
@@ -383,6 +401,11 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
     on_other = np.zeros((kinds.shape[0], 3))
     gaps = np.zeros(kinds.shape[0])
     energy = 0.0
+    # one pair's arrays, reused (pair_geometry, distance_terms)
+    points, c, dc = np.zeros((4, 3)), np.zeros(4), np.zeros((4, 2))
+    free, node = np.zeros(2, np.bool_), np.zeros(4, np.int64)
+    r, rz, d_x, d_xx, f_xz = np.zeros(3), np.zeros((3, 2)), np.zeros(12), np.zeros((12, 12)), np.zeros((12, 2))
+    hose_point, axis_point = np.zeros(3), np.zeros(3)  # axis_point: on the other body's axis (or centre, or surface)
     for p in range(kinds.shape[0]):
         kind, i, j = kinds[p], first[p], second[p]
         if kind == STATION_PLANE:
@@ -399,8 +422,8 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
             on_other[p] = nodes[i] - (gap + hose_radius) * normal
             gaps[p] = gap
             continue
-        points, m, c, dc, free, node, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges)
-        d, d_x, d_xx = distance_terms(points, m, c, dc, free)
+        m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node)
+        d = distance_terms(points, m, c, dc, free, r, rz, d_x, d_xx, f_xz)
         on_first = 1 if kind == STATION_TRIANGLE else 2  # the points of the (first) hose primitive
         other_radius = hose_radius if kind == SEGMENT_SEGMENT else radius
         gap = d - hose_radius - other_radius
@@ -423,15 +446,17 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
                         hess[ka, kb, x, y] += weight * (
                             b2 * d_x[3 * a + x] * d_x[3 * bb + y] + b1 * d_xx[3 * a + x, 3 * bb + y]
                         )
-        hose_point = np.zeros(3)
-        axis_point = np.zeros(3)  # on the other body's axis (or centre, or surface)
+        hose_point[:] = 0.0
+        axis_point[:] = 0.0
         for a in range(m):
-            if a < on_first:
-                hose_point += c[a] * points[a]
-            else:
-                axis_point -= c[a] * points[a]
-        on_hose[p] = hose_point
-        on_other[p] = axis_point + other_radius / d * (hose_point - axis_point)
+            for x in range(3):
+                if a < on_first:
+                    hose_point[x] += c[a] * points[a, x]
+                else:
+                    axis_point[x] -= c[a] * points[a, x]
+        for x in range(3):
+            on_hose[p, x] = hose_point[x]
+            on_other[p, x] = axis_point[x] + other_radius / d * (hose_point[x] - axis_point[x])
         gaps[p] = gap
     return energy, grad, hess, forces, on_hose, on_other, gaps
 

@@ -31,8 +31,7 @@ import scipy.linalg
 
 from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.banded import NEUTRAL, band_to_dense, banded_matvec
-from hoseline.mechanics.clipped import unknown_layout
-from hoseline.mechanics.clipped_newton import clip_arrays, clip_forces
+from hoseline.mechanics.clipped_newton import clip_forces, segment_unknowns
 from hoseline.mechanics.contact import (
     MESH_KINDS,
     PAIR_KINDS,
@@ -236,12 +235,11 @@ class ContactSystem:
         return hess
 
 
-def rotation_index(props: RodProperties, clamps: Clamps, state: RodState) -> np.ndarray:
+def rotation_index(props: RodProperties, clamps: Clamps) -> np.ndarray:
     """Index of each segment's first rotation unknown (N,) in the system of newton.evaluate."""
     if not clamps.clips:
         return 3 * np.arange(props.segments)
-    nodes, _, _, _, roll_free = clip_arrays(clamps, state)
-    return unknown_layout(props.segments, nodes, roll_free, clamps.roll_free)[0]
+    return segment_unknowns(props.segments, clamps)
 
 
 def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> ContactSystem:
@@ -256,7 +254,7 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
     band = base.band.copy()
     index = None
     if kinds.size:
-        index = rotation_index(props, clamps, state)
+        index = rotation_index(props, clamps)
         grad += rotation_gradient_and_band(state.frames, h, node_grad, index, band)
     end_forces = np.linalg.norm(state.end_force) + np.linalg.norm(clip_forces(clamps, state))
     contact_total = float(np.sum(np.linalg.norm(forces, axis=1))) if kinds.size else 0.0
@@ -365,7 +363,7 @@ class StepFilter:
 
 def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, model: ContactModel) -> StepFilter:
     """The StepFilter of `step` from `state` (see StepFilter)."""
-    index = rotation_index(props, clamps, state)
+    index = rotation_index(props, clamps)
     turns = np.linalg.norm(step[index[:, None] + np.arange(3)[None, :]], axis=1)
     nodes = centerline(state.frames, clamps.start_point, props.segment_length)
     return motion_filter(nodes, turns, 0.0, props.segment_length, model)
@@ -384,10 +382,14 @@ def motion_filter(nodes: np.ndarray, turns: np.ndarray, start_move: float, h: fl
                                                       1.0 - SAFE_FRACTION)
     swept = None
     if model.mesh.count:
-        station_cutoffs = reach + model.activation
+        bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
+        # no trial goes beyond the limit, where station k moves at most limit reach_k off its place and its path
+        # limit^2 bend_k off its chord: a station whose gap that cannot shrink by SAFE_FRACTION is never near in
+        # _paths_clear, and is not measured (a long Newton step cut to a small limit measured every station)
+        closable = (limit * reach + limit * limit * bend) / (1.0 - SAFE_FRACTION)
+        station_cutoffs = np.minimum(reach + model.activation, closable * (1.0 + 1e-9) + 1e-9)
         station_gaps = model.mesh.station_gaps(nodes, model.hose_radius, station_cutoffs)
         station_gaps[station_gaps >= station_cutoffs] = math.inf  # out of reach
-        bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
         swept = (nodes, station_gaps, bend)
     return StepFilter((kinds, first, second), gaps, limit, swept)
 
@@ -446,13 +448,17 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
         watch = step_filter(props, clamps, state, step, model)
         alpha = watch.limit
         accepted = None
+        # a trial is taken where the step filter admits it and the residual falls; the cheaper test first: the
+        # filter's few distances without meshes, the evaluation with them (a mesh's swept check costs more)
+        filter_first = model.mesh.count == 0
         for _ in range(max_halvings):
             trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
-            if not watch.admits(props, clamps, trial, model, alpha):
+            if filter_first and not watch.admits(props, clamps, trial, model, alpha):
                 alpha *= 0.5
                 continue
             trial_system = evaluate_contact(props, clamps, trial, model)
-            if trial_system.residual < (1.0 - 1e-4 * alpha) * system.residual or trial_system.residual <= tolerance:
+            falls = trial_system.residual < (1.0 - 1e-4 * alpha) * system.residual or trial_system.residual <= tolerance
+            if falls and (filter_first or watch.admits(props, clamps, trial, model, alpha)):
                 accepted = trial, trial_system
                 break
             alpha *= 0.5
