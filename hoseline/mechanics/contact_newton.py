@@ -301,17 +301,19 @@ class StepFilter:
     through it, no accepted step crosses into penetration.
     Meshes are surfaces, not bodies (contact_mesh.py, step filter): the whole path of every station
     and of every segment near an edge must stay clear by SAFE_FRACTION of its gap now.  swept: (the
-    stations now (N+1, 3) mm, their gaps to the meshes (N+1,) mm, inf where out of reach, the bound
-    (N+1,) mm of each station path's distance from its chord for the whole step), or None without
-    meshes; the segment-edge pairs are listed at each trial, within the reach of its real move (the
-    chords of its stations and their bend: far tighter than the bound of the whole step, which on a
-    fine mesh took thousands of edges in).
+    stations now (N+1, 3) mm, the reach (N+1,) mm within which their gaps to the meshes matter, the
+    bound (N+1,) mm of each station path's distance from its chord for the whole step), or None
+    without meshes.  The stations' gaps and the segment-edge pairs are found at each trial, within
+    the reach of its real move (the chords of its stations and their bend: far tighter than the bound
+    of the whole step, which on a fine mesh took every station and thousands of edges in); the
+    stations' gaps are kept for the trials after (a halved step's reach is mostly within the last's).
     """
 
     pairs: tuple
     gaps: np.ndarray
     limit: float
     swept: tuple | None = None
+    _station_gaps: tuple | None = None  # (bounds (N+1,) mm, the stations' mesh gaps, inf at or beyond the bound)
 
     def admits(self, props: RodProperties, clamps: Clamps, trial: RodState, model: ContactModel, alpha: float) -> bool:
         """Whether the trial state, `alpha` times the step, keeps every watched gap above SAFE_FRACTION of its value."""
@@ -322,13 +324,12 @@ class StepFilter:
         SAFE_FRACTION of its value.  alpha may not exceed the limit: the pairs are watched for the move cut to it."""
         if alpha > self.limit:
             raise ValueError(f"a trial at {alpha} of the move, beyond the step filter's limit {self.limit}")
-        if self.swept is not None and not self._paths_clear(nodes, model, alpha):
+        kinds, first, second = self.pairs  # the analytic pairs first: their check costs least
+        if self.gaps.size and not pairs_clear(nodes, model.hose_radius, model.planes, model.balls, model.capsules,
+                                              model.mesh.triangles, model.mesh.edges, kinds, first, second,
+                                              SAFE_FRACTION * self.gaps):
             return False
-        if self.gaps.size == 0:
-            return True
-        kinds, first, second = self.pairs
-        return bool(pairs_clear(nodes, model.hose_radius, model.planes, model.balls, model.capsules,
-                                model.mesh.triangles, model.mesh.edges, kinds, first, second, SAFE_FRACTION * self.gaps))
+        return self.swept is None or self._paths_clear(nodes, model, alpha)
 
     def _paths_clear(self, nodes: np.ndarray, model: ContactModel, alpha: float) -> bool:
         """Whether every station and every segment near a mesh edge stays clear of the meshes along its path, by
@@ -337,12 +338,14 @@ class StepFilter:
         The path of station k lies within alpha^2 bend_k of its chord (contact_mesh.py), so its gap along the
         step is at least the chord's gap less that; a segment's points within alpha^2 bend of the segment
         carried along its ends' chords (contact_mesh.swept_edges_clear)."""
-        start, gaps, bend = self.swept
+        start, reach, bend = self.swept
         bend = alpha * alpha * bend
         # how far each station, and each segment's points, can be from where they are now along the move: its chord
         # and the bend; a station or segment-edge pair whose gap cannot shrink to SAFE_FRACTION of it by that much
         # is clear whatever the path (as `watched` for the analytic pairs), and is not checked
         moves = np.linalg.norm(nodes - start, axis=1) + bend
+        closable = moves / (1.0 - SAFE_FRACTION)  # a station farther than this is clear: its gap is not measured
+        gaps = self._gaps_below(model, np.minimum(reach, closable * (1.0 + 1e-9) + 1e-9))
         near = (1.0 - SAFE_FRACTION) * gaps <= moves  # False where the gap is inf (out of reach)
         if np.any(near):
             needed = SAFE_FRACTION * gaps[near] + bend[near]  # a chord farther than this is clear: no need to know more
@@ -359,6 +362,20 @@ class StepFilter:
         segments, edges, edge_gaps = segments[on_edges], edges[on_edges], edge_gaps[on_edges]
         clearances = model.hose_radius + SAFE_FRACTION * edge_gaps + bend[segments + 1]
         return bool(swept_edges_clear(start, nodes, segments, edges, model.mesh.edges, clearances, SWEPT_EVALUATIONS))
+
+
+    def _gaps_below(self, model: ContactModel, bounds: np.ndarray) -> np.ndarray:
+        """The stations' gaps (N+1,) mm to the meshes where below `bounds` (mm), inf where not: from the last trial's
+        where its bounds were as long (a gap is known exactly below the bound it was sought within), else sought."""
+        if self._station_gaps is not None and np.all(bounds <= self._station_gaps[0]):
+            gaps = self._station_gaps[1].copy()
+        else:
+            start = self.swept[0]
+            gaps = model.mesh.station_gaps(start, model.hose_radius, bounds)
+            gaps[gaps >= bounds] = math.inf
+            self._station_gaps = bounds, gaps.copy()
+        gaps[gaps >= bounds] = math.inf
+        return gaps
 
 
 def step_filter(props: RodProperties, clamps: Clamps, state: RodState, step: np.ndarray, model: ContactModel) -> StepFilter:
@@ -383,14 +400,7 @@ def motion_filter(nodes: np.ndarray, turns: np.ndarray, start_move: float, h: fl
     swept = None
     if model.mesh.count:
         bend = np.concatenate([[0.0], h / 8.0 * np.cumsum(turns**2)])  # |path - chord| <= h/8 sum (alpha |delta_i|)^2
-        # no trial goes beyond the limit, where station k moves at most limit reach_k off its place and its path
-        # limit^2 bend_k off its chord: a station whose gap that cannot shrink by SAFE_FRACTION is never near in
-        # _paths_clear, and is not measured (a long Newton step cut to a small limit measured every station)
-        closable = (limit * reach + limit * limit * bend) / (1.0 - SAFE_FRACTION)
-        station_cutoffs = np.minimum(reach + model.activation, closable * (1.0 + 1e-9) + 1e-9)
-        station_gaps = model.mesh.station_gaps(nodes, model.hose_radius, station_cutoffs)
-        station_gaps[station_gaps >= station_cutoffs] = math.inf  # out of reach
-        swept = (nodes, station_gaps, bend)
+        swept = (nodes, reach + model.activation, bend)  # a station farther than its reach and d_hat is out of reach
     return StepFilter((kinds, first, second), gaps, limit, swept)
 
 
