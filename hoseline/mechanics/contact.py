@@ -121,16 +121,18 @@ def triangle_parameters(x, a, b, c):
 
 
 @njit(cache=True)
-def distance_terms(points, m, c, dc, free, r, rz, f_x, f_xx, f_xz):
-    """Distance d = |sum_j c_j X_j| at the closest parameters, its gradient (3m,) and Hessian (3m, 3m) in the points.
+def distance_terms(points, m, c, dc, free, used, r, rz, f_x, f_xx, f_xz):
+    """Distance d = |sum_j c_j X_j| at the closest parameters, its gradient and Hessian in the first `used` points.
 
     points: (4, 3), the first m used.  c: (4,) coefficients at z*.  dc: (4, 2), dc[j, k] = dc_j/dz_k.
     free: (2,) bool, the parameters strictly inside their range (the others stay on their bound).
+    used: the points whose derivatives are wanted (the hose's, which come first: an obstacle's points are
+    fixed; the blocks of the full gradient (3m,) and Hessian (3m, 3m) they are, to the bit).
     r (3,), rz (3, 2), f_x (12,), f_xx (12, 12), f_xz (12, 2): scratch, allocated once by the caller (a pair's
-    own arrays cost more than its arithmetic).  Returns d; the gradient is left in f_x[:3m], the Hessian in
-    f_xx[:3m, :3m].
+    own arrays cost more than its arithmetic).  Returns d; the gradient is left in f_x[:3 used], the Hessian
+    in f_xx[:3 used, :3 used].
     """
-    n = 3 * m
+    n = 3 * used
     for x in range(3):
         r[x] = 0.0
         for k in range(2):
@@ -144,10 +146,10 @@ def distance_terms(points, m, c, dc, free, r, rz, f_x, f_xx, f_xz):
     for p in range(n):
         for q in range(n):
             f_xx[p, q] = 0.0
-    for j in range(m):
+    for j in range(used):
         for x in range(3):
             f_x[3 * j + x] = 2.0 * c[j] * r[x]
-            for l in range(m):
+            for l in range(used):
                 f_xx[3 * j + x, 3 * l + x] = 2.0 * c[j] * c[l]
     nf = 0
     k0 = k1 = 0  # the free parameters
@@ -162,7 +164,7 @@ def distance_terms(points, m, c, dc, free, r, rz, f_x, f_xx, f_xz):
         # f_xx -= f_xz f_zz^-1 f_xz^T, by hand: at most 12 x 2, where a BLAS call per pair cost more than the sums
         for a, ka in enumerate((k0, k1)):
             if a < nf:
-                for j in range(m):
+                for j in range(used):
                     for x in range(3):
                         f_xz[3 * j + x, a] = 2.0 * (dc[j, ka] * r[x] + c[j] * rz[x, ka])
         f_00 = 2.0 * (rz[0, k0] * rz[0, k0] + rz[1, k0] * rz[1, k0] + rz[2, k0] * rz[2, k0])  # f_zz
@@ -423,24 +425,21 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
             gaps[p] = gap
             continue
         m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node)
-        d = distance_terms(points, m, c, dc, free, r, rz, d_x, d_xx, f_xz)
         on_first = 1 if kind == STATION_TRIANGLE else 2  # the points of the (first) hose primitive
+        used = 4 if kind == SEGMENT_SEGMENT else on_first  # the hose's points: the others are fixed
+        d = distance_terms(points, m, c, dc, free, used, r, rz, d_x, d_xx, f_xz)
         other_radius = hose_radius if kind == SEGMENT_SEGMENT else radius
         gap = d - hose_radius - other_radius
         b, b1, b2 = barrier(gap, d_hat)
         energy += weight * b
-        for a in range(m):
+        for a in range(used):
             ka = node[a]
-            if ka < 0:
-                continue
             for x in range(3):
                 grad[ka, x] += weight * b1 * d_x[3 * a + x]
                 if a < on_first:
                     forces[p, x] -= weight * b1 * d_x[3 * a + x]
-            for bb in range(m):
+            for bb in range(used):
                 kb = node[bb]
-                if kb < 0:
-                    continue
                 for x in range(3):
                     for y in range(3):
                         hess[ka, kb, x, y] += weight * (
