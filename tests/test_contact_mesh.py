@@ -516,3 +516,53 @@ def test_the_step_filter_refuses_a_step_through_a_thin_plate_that_ends_clear_of_
         moved = centerline(trial.frames, clamps.start_point, props.segment_length)
         assert model.penetration(moved) is None  # clear at the end of the step: 30 mm above the plate, or below it
         assert step_filter(props, clamps, state, step, model).admits(props, clamps, trial, model, 1.0) == admitted
+
+
+def test_the_step_filter_decides_as_with_every_station_s_gap_sought_at_once():
+    """StepFilter seeks the stations' mesh gaps at each trial, only within what its move can close, and keeps them
+    for the trials after: the same decisions as a new filter at each trial, and as one holding every station's gap
+    within the whole step's reach (what it sought before), for random steps of a hose lying 0.5 mm over a floor
+    (one triangle, its edges far: only the stations' paths guard its face), each tried at fractions growing and
+    shrinking; and a swing down is refused exactly where its end comes within a tenth of its gap (a
+    station out of reach, whose whole step cannot bring it within d_hat, is not watched)."""
+    from hoseline.mechanics.contact_newton import SAFE_FRACTION, step_filter
+    from hoseline.mechanics.newton import RodProperties, apply_step
+    from hoseline.mechanics.rod import Clamps, RodState
+    from hoseline.mechanics.rotations import frame_from_tangent
+    from hoseline.model.obstacles import Mesh
+    from hoseline.procedures.contact.model import contact_model
+
+    n_seg, h, radius = 40, 2.0, 1.0
+    frames = np.array([frame_from_tangent(np.array([1.0, 0.0, 0.0]))] * n_seg)
+    props = RodProperties(np.array([1e4, 1e4, 1e4]), h, n_seg)
+    start = np.array([-40.0, 0.0, radius + 0.5])
+    clamps = Clamps(start, frames[0].copy(), start + [80.0, 0.0, 0.0], frames[-1].copy(), False, np.zeros(3))
+    state = RodState(frames, np.zeros(3))
+    floor = Mesh(np.array([[-1000.0, -1000.0, 0.0], [1000.0, -1000.0, 0.0], [0.0, 1000.0, 0.0]]), np.array([[0, 1, 2]]),
+                 "floor")
+    model = contact_model([floor], radius, h, 1.0)
+    rng = np.random.default_rng(21)
+    steps = [size * rng.standard_normal(3 * n_seg) for size in (1e-3, 3e-3, 1e-2, 3e-2, 0.1) for _ in range(4)]
+    drops = (0.3, 0.48, 0.6, 0.8, 1.2)
+    for drop in drops:  # the hose swung down about its start: its end drops by `drop` mm
+        steps.append(np.zeros(3 * n_seg))
+        steps[-1][1::3] = drop / (n_seg * h)
+    decisions = set()
+    for number, step in enumerate(steps):
+        kept = step_filter(props, clamps, state, step, model)
+        eager = step_filter(props, clamps, state, step, model)
+        nodes, reach, _ = eager.swept
+        every = model.mesh.station_gaps(nodes, radius, reach)
+        every[every >= reach] = np.inf
+        eager._station_gaps = reach, every  # every station's gap within its reach, as the filter once held
+        for fraction in (0.25, 1.0, 0.5, 0.125, 1.0):  # a trial may reach farther than the last one
+            alpha = fraction * kept.limit
+            trial = apply_step(props, clamps, state, alpha * step, np.zeros(3))
+            fresh = step_filter(props, clamps, state, step, model).admits(props, clamps, trial, model, alpha)
+            assert kept.admits(props, clamps, trial, model, alpha) == fresh
+            assert eager.admits(props, clamps, trial, model, alpha) == fresh
+            if number >= len(steps) - len(drops):  # a swing is refused where its end comes within a tenth of its
+                drop = drops[number - len(steps)]  # gap, unless the whole step cannot bring it within d_hat
+                assert fresh == (alpha * drop < (1.0 - SAFE_FRACTION) * 0.5 or drop + model.activation <= 0.5)
+            decisions.add(fresh)
+    assert decisions == {True, False}
