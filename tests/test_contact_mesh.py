@@ -566,3 +566,36 @@ def test_the_step_filter_decides_as_with_every_station_s_gap_sought_at_once():
                 assert fresh == (alpha * drop < (1.0 - SAFE_FRACTION) * 0.5 or drop + model.activation <= 0.5)
             decisions.add(fresh)
     assert decisions == {True, False}
+
+
+@pytest.mark.parametrize("obstacle", ["mesh", "plane"])
+def test_the_contact_newton_takes_no_step_its_filter_refuses(obstacle, monkeypatch):
+    """The contact Newton evaluates a trial before its step filter where there are meshes (the cheaper test first)
+    and after it where there are none, and takes a step only where both agree: a hose bowed up between two clamps
+    and loaded by its weight, a floor 50 mm below, converges in a few steps, and not at all with a filter that
+    refuses every step."""
+    from hoseline.mechanics.contact_newton import StepFilter, solve_with_contact
+    from hoseline.mechanics.newton import RodProperties
+    from hoseline.mechanics.rod import Clamps, RodState
+    from hoseline.mechanics.rotations import frame_from_tangent
+    from hoseline.model.obstacles import Mesh, Plane
+    from hoseline.procedures.contact.model import contact_model
+
+    n_seg, h, radius = 30, 10.0, 2.0
+    angles = 0.4 * np.cos(np.pi * (np.arange(n_seg) + 0.5) / n_seg)
+    frames = np.array([frame_from_tangent(np.array([np.cos(a), 0.0, np.sin(a)])) for a in angles])
+    level = frame_from_tangent(np.array([1.0, 0.0, 0.0]))
+    props = RodProperties(np.array([1e5, 1e5, 1e5]), h, n_seg)
+    clamps = Clamps(np.zeros(3), level, np.array([h * np.sum(np.cos(angles)), 0.0, 0.0]), level.copy(), False,
+                    np.array([0.0, 0.0, -2e-3]))
+    state = RodState(frames, np.zeros(3))
+    floor = (Mesh(np.array([[-500.0, -500.0, -50.0], [900.0, -500.0, -50.0], [200.0, 900.0, -50.0]]),
+                  np.array([[0, 1, 2]]), "floor") if obstacle == "mesh"
+             else Plane(np.array([0.0, 0.0, -50.0]), np.array([0.0, 0.0, 1.0]), "floor"))
+    model = contact_model([floor], radius, h, 1e-2)
+    assert (model.mesh.count == 1) == (obstacle == "mesh")
+    _, report = solve_with_contact(props, clamps, state, model)
+    assert report.converged and report.iterations >= 2
+    monkeypatch.setattr(StepFilter, "admits", lambda *arguments: False)
+    _, report = solve_with_contact(props, clamps, state, model)
+    assert not report.converged and report.message == "no acceptable step found"

@@ -453,8 +453,11 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
             if unstable > 0 and _lowest_mode(system)[0] >= -NEUTRAL:
                 unstable = 0  # the pivots counted an eigenvalue that is zero to rounding (see NEUTRAL_MODE)
             return state, NewtonReport(True, iteration, system.residual, unstable)
-        if iteration == max_iterations or not np.all(np.isfinite(step)):
+        if iteration == max_iterations:
             break
+        if not np.all(np.isfinite(step)):  # e.g. a free tip: its constraint rows are empty (see _multipliers)
+            return state, NewtonReport(False, iteration, system.residual, unstable,
+                                       "non-finite Newton step (a singular system)")
         watch = step_filter(props, clamps, state, step, model)
         alpha = watch.limit
         accepted = None
