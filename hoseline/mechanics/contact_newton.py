@@ -256,9 +256,11 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
     if kinds.size:
         index = rotation_index(props, clamps)
         grad += rotation_gradient_and_band(state.frames, h, node_grad, index, band)
-    end_forces = np.linalg.norm(state.end_force) + np.linalg.norm(clip_forces(clamps, state))
+    clip_force = clip_forces(clamps, state).ravel()
+    # norms as np.linalg.norm takes them (the square root of the dot product), without its overhead
+    end_forces = math.sqrt(state.end_force @ state.end_force) + math.sqrt(clip_force @ clip_force)
     contact_total = float(np.sum(np.linalg.norm(forces, axis=1))) if kinds.size else 0.0
-    weight_total = float(np.linalg.norm(clamps.line_weight)) * props.length
+    weight_total = math.sqrt(clamps.line_weight @ clamps.line_weight) * props.length
     scale = props.largest_stiffness / props.length + (end_forces + weight_total + contact_total) * props.length
     residual = max(float(np.max(np.abs(grad))) / scale, float(np.max(np.abs(base.constraint))) / props.length)
     return ContactSystem(base.energy + energy, grad, band, base.jac_t, base.constraint, residual,
