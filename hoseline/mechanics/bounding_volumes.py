@@ -28,7 +28,9 @@ def build_tree(item_lower, item_upper, centroids, leaf_size):
     item_lower, item_upper, centroids: (F, 3) mm per item (a triangle, an edge).
     Returns (order, lower, upper, children, ranges): the items in tree order; per node its
     box corners (M, 3), children (M, 2) (-1 for a leaf) and its range [first, first + count)
-    in tree order (M, 2).
+    in tree order (M, 2).  A node's items are split at their median by a selection (_select, O(n)
+    a node), not a sort: the build is O(n log n), where sorting every node's items made it
+    O(n log^2 n) (the two trees of a strut of 100 000 triangles and 150 000 edges: 113 -> 45 ms).
     """
     count = item_lower.shape[0]
     capacity = 2 * count  # a binary tree with at least one triangle per leaf has fewer nodes
@@ -41,26 +43,70 @@ def build_tree(item_lower, item_upper, centroids, leaf_size):
     used = 1
     while len(stack) > 0:
         node, first, end = stack.pop()
-        members = order[first:end]
+        low_centroid = np.full(3, np.inf)
+        high_centroid = np.full(3, -np.inf)
         for k in range(3):
-            lower[node, k] = item_lower[members, k].min()
-            upper[node, k] = item_upper[members, k].max()
+            lower[node, k] = np.inf
+            upper[node, k] = -np.inf
+        for position in range(first, end):
+            item = order[position]
+            for k in range(3):
+                lower[node, k] = min(lower[node, k], item_lower[item, k])
+                upper[node, k] = max(upper[node, k], item_upper[item, k])
+                low_centroid[k] = min(low_centroid[k], centroids[item, k])
+                high_centroid[k] = max(high_centroid[k], centroids[item, k])
         ranges[node, 0] = first
         ranges[node, 1] = end - first
         if end - first <= leaf_size:
             continue
-        spread = np.empty(3)
-        for k in range(3):
-            spread[k] = centroids[members, k].max() - centroids[members, k].min()
-        axis = int(np.argmax(spread))
-        order[first:end] = members[np.argsort(centroids[members, axis], kind="mergesort")]
+        axis = int(np.argmax(high_centroid - low_centroid))
         middle = (first + end) // 2
+        _select(order, centroids[:, axis], first, end, middle)
         children[node, 0] = used
         children[node, 1] = used + 1
         stack.append((used, first, middle))
         stack.append((used + 1, middle, end))
         used += 2
     return order, lower[:used].copy(), upper[:used].copy(), children[:used].copy(), ranges[:used].copy()
+
+
+@njit(cache=True, inline="always")
+def _before(a, b, keys):
+    # the strict order of the selection: by key, ties by item number (so the split is the same on every machine)
+    return keys[a] < keys[b] or (keys[a] == keys[b] and a < b)
+
+
+@njit(cache=True)
+def _select(order, keys, first, end, nth):
+    """Rearrange order[first:end] so that order[nth] is the item it would hold sorted (by _before), those before
+    it earlier and those after it later (Hoare's quickselect, median-of-three pivots: O(n) expected).
+
+    Written by hand (Numba): NumPy's argpartition has no tie rule and is not available in compiled code."""
+    low, high = first, end - 1
+    while high > low:
+        middle = (low + high) // 2
+        a, b, c = order[low], order[middle], order[high]
+        if _before(b, a, keys):
+            a, b = b, a
+        if _before(c, b, keys):
+            b = c if _before(a, c, keys) else a
+        pivot = b
+        i, j = low, high
+        while i <= j:
+            while _before(order[i], pivot, keys):
+                i += 1
+            while _before(pivot, order[j], keys):
+                j -= 1
+            if i <= j:
+                order[i], order[j] = order[j], order[i]
+                i += 1
+                j -= 1
+        if nth <= j:
+            high = j
+        elif nth >= i:
+            low = i
+        else:
+            return
 
 
 @njit(cache=True)
