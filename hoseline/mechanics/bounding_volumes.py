@@ -81,7 +81,8 @@ def _select(order, keys, first, end, nth):
     """Rearrange order[first:end] so that order[nth] is the item it would hold sorted (by _before), those before
     it earlier and those after it later (Hoare's quickselect, median-of-three pivots: O(n) expected).
 
-    Written by hand (Numba): NumPy's argpartition has no tie rule and is not available in compiled code."""
+    Written by hand (Numba): np.argpartition has no tie rule (which of tied centroids, common on a regular mesh,
+    go left would depend on its implementation) and works on a gathered copy of the node's keys."""
     low, high = first, end - 1
     while high > low:
         middle = (low + high) // 2

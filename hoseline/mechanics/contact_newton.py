@@ -365,17 +365,13 @@ class StepFilter:
         clearances = model.hose_radius + SAFE_FRACTION * edge_gaps + bend[segments + 1]
         return bool(swept_edges_clear(start, nodes, segments, edges, model.mesh.edges, clearances, SWEPT_EVALUATIONS))
 
-
     def _gaps_below(self, model: ContactModel, bounds: np.ndarray) -> np.ndarray:
         """The stations' gaps (N+1,) mm to the meshes where below `bounds` (mm), inf where not: from the last trial's
         where its bounds were as long (a gap is known exactly below the bound it was sought within), else sought."""
-        if self._station_gaps is not None and np.all(bounds <= self._station_gaps[0]):
-            gaps = self._station_gaps[1].copy()
-        else:
-            start = self.swept[0]
-            gaps = model.mesh.station_gaps(start, model.hose_radius, bounds)
-            gaps[gaps >= bounds] = math.inf
-            self._station_gaps = bounds, gaps.copy()
+        if self._station_gaps is None or np.any(bounds > self._station_gaps[0]):
+            sought = model.mesh.station_gaps(self.swept[0], model.hose_radius, bounds)
+            self._station_gaps = bounds, sought
+        gaps = self._station_gaps[1].copy()
         gaps[gaps >= bounds] = math.inf
         return gaps
 
