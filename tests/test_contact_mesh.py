@@ -599,3 +599,22 @@ def test_the_contact_newton_takes_no_step_its_filter_refuses(obstacle, monkeypat
     monkeypatch.setattr(StepFilter, "admits", lambda *arguments: False)
     _, report = solve_with_contact(props, clamps, state, model)
     assert not report.converged and report.message == "no acceptable step found"
+
+
+def test_the_step_filter_s_kept_station_gaps_are_those_sought_anew():
+    """StepFilter._gaps_below answers from the gaps it last sought where the bounds are within theirs, else seeks
+    them again: the exact gaps below any sequence of bounds, growing and shrinking, and inf beyond them."""
+    from hoseline.mechanics.contact_newton import motion_filter
+    from hoseline.model.obstacles import Mesh
+    from hoseline.procedures.contact.model import contact_model
+
+    vertices, faces = _faceted_drum(64, rows=8)
+    model = contact_model([Mesh(vertices, faces, "drum")], 1.0, 2.0, 1.0)
+    rng = np.random.default_rng(3)
+    nodes = np.column_stack([np.linspace(-60.0, 60.0, 31), np.zeros(31), np.full(31, 43.0)])  # over the drum
+    watch = motion_filter(nodes, np.full(30, 0.05), 0.0, 2.0, model)
+    exact = model.mesh.station_gaps(nodes, 1.0, np.full(31, np.inf))
+    for scale in (0.5, 5.0, 1.0, 20.0, 2.0, 0.1):
+        bounds = scale * rng.uniform(0.5, 1.5, 31)
+        expected = np.where(exact < bounds, exact, np.inf)
+        np.testing.assert_array_equal(watch._gaps_below(model, bounds), expected)
