@@ -14,7 +14,13 @@ import math
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.proximity import corner_of, point_of, segment_plane_gap, segment_triangle_distance
+from hoseline.mechanics.proximity import (
+    corner_of,
+    point_between,
+    point_of,
+    segment_plane_gap,
+    segment_triangle_distance,
+)
 
 LEAF_SIZE = 4
 LEAF_PIECES = 4  # of a segment, for the leaf test of leaves_within (leaf_within)
@@ -278,9 +284,8 @@ def _pieces_gap(p, q, lower, upper, enough):
     # the smallest box_gap (mm) of the LEAF_PIECES equal pieces of segment pq, or the first one below `enough`
     smallest = math.inf
     for piece in range(LEAF_PIECES):
-        s, e = piece / LEAF_PIECES, (piece + 1) / LEAF_PIECES
-        a = (p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1]), p[2] + s * (q[2] - p[2]))
-        b = (p[0] + e * (q[0] - p[0]), p[1] + e * (q[1] - p[1]), p[2] + e * (q[2] - p[2]))
+        a = point_between(p, q, piece / LEAF_PIECES)
+        b = point_between(p, q, (piece + 1) / LEAF_PIECES)
         smallest = min(smallest, box_gap(a, b, lower, upper))
         if smallest < enough:
             break

@@ -76,7 +76,6 @@ from hoseline.mechanics.bounding_volumes import (
     chain_tree,
     corners_of,
     leaves_within,
-    point_of,
     segment_search,
 )
 from hoseline.mechanics.contact import (
@@ -93,7 +92,13 @@ from hoseline.mechanics.contact import (
     triangle_parameters,
 )
 from hoseline.mechanics.leaf_lists import MARGIN_RADII, REACH_RADII, LeafLists
-from hoseline.mechanics.proximity import corner_of, segment_plane_gap, segment_triangle_distance
+from hoseline.mechanics.proximity import (
+    corner_of,
+    point_between,
+    point_of,
+    segment_plane_gap,
+    segment_triangle_distance,
+)
 from hoseline.model.obstacles import has_area
 
 FLAT = 1e-9  # sine of the angle below which two triangles sharing an edge lie in one plane
@@ -580,13 +585,6 @@ def _squared_distance(x, y):
     return (x[0] - y[0]) ** 2 + (x[1] - y[1]) ** 2 + (x[2] - y[2]) ** 2
 
 
-@njit(cache=True, inline="always")
-def _between(start, end, tau):
-    # start + tau (end - start), as a tuple (mm)
-    return (start[0] + tau * (end[0] - start[0]), start[1] + tau * (end[1] - start[1]),
-            start[2] + tau * (end[2] - start[2]))
-
-
 @njit(cache=True)
 def swept_edges_clear(start, end, first, second, edges, clearances, evaluations):
     """Whether each hose segment first[p], carried from its place in `start` to that in `end` ((N+1, 3) mm, its ends
@@ -613,7 +611,8 @@ def swept_edges_clear(start, end, first, second, edges, clearances, evaluations)
         while count > 0:
             count -= 1
             ta, tb = intervals[count]
-            pa, qa, pb, qb = _between(p0, p1, ta), _between(q0, q1, ta), _between(p0, p1, tb), _between(q0, q1, tb)
+            pa, qa = point_between(p0, p1, ta), point_between(q0, q1, ta)
+            pb, qb = point_between(p0, p1, tb), point_between(q0, q1, tb)
             # at the start, the pair just found (p0 + 0 (p1 - p0) is p0 to the bit)
             da, sa, ua = start_pair if ta == 0.0 else segment_closest(pa, qa, a, b)
             db, sb, ub = segment_closest(pb, qb, a, b)

@@ -34,7 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.bounding_volumes import leaf_bounds, leaf_within, point_of
+from hoseline.mechanics.bounding_volumes import leaf_bounds, leaf_within
+from hoseline.mechanics.proximity import point_of
 
 MARGIN_RADII = 0.2  # how far each reach is grown for a list, in hose radii (1 mm for the thesis hose)
 REACH_RADII = 1.5  # the longest reach a list is made for, in hose radii: the barrier's and a short step's

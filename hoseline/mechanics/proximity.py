@@ -34,6 +34,12 @@ def corner_of(items, i, k):
 
 
 @njit(cache=True, inline="always")
+def point_between(p, q, t):
+    """p + t (q - p) for points p, q (3-tuples or rows, mm), as a tuple."""
+    return (p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]), p[2] + t * (q[2] - p[2]))
+
+
+@njit(cache=True, inline="always")
 def _sub(a, b):
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 

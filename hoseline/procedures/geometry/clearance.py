@@ -20,8 +20,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.bounding_volumes import LEAF_SIZE, STACK_SIZE, build_tree, corners_of, point_of, segment_search
-from hoseline.mechanics.proximity import segment_triangle_distance
+from hoseline.mechanics.bounding_volumes import LEAF_SIZE, STACK_SIZE, build_tree, corners_of, segment_search
+from hoseline.mechanics.proximity import point_of, segment_triangle_distance
 
 
 @dataclass(frozen=True)
