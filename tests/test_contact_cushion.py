@@ -5,11 +5,12 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+import trimesh
 
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.mechanics.newton import NewtonReport
 from hoseline.model.clips import Clip
-from hoseline.model.obstacles import Cylinder
+from hoseline.model.obstacles import Cylinder, Mesh
 from hoseline.procedures.contact import cushion
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.sequence import solve
@@ -56,6 +57,37 @@ def test_the_cushioned_path_ends_at_the_equilibrium_of_the_path_with_the_model_s
     np.testing.assert_allclose(on_cushion.centerline, without_cushion.centerline, rtol=0.0, atol=1e-9)
     assert on_cushion.lock_angle_deg == pytest.approx(without_cushion.lock_angle_deg, abs=1e-9)
     assert on_cushion.stable and on_cushion.iterations < without_cushion.iterations
+
+
+def faceted(case, sections: int, longest_edge: float):
+    """`case` with its cylinder as a closed faceted tube of `sections` sides, triangles at most `longest_edge` mm."""
+    cylinder, = case.contact
+    axis = (cylinder.end - cylinder.start) / np.linalg.norm(cylinder.end - cylinder.start)
+    tube = trimesh.creation.cylinder(radius=cylinder.radius, height=float(np.linalg.norm(cylinder.end - cylinder.start)),
+                                     sections=sections, transform=trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis))
+    vertices, faces = trimesh.remesh.subdivide_to_size(tube.vertices + 0.5 * (cylinder.start + cylinder.end), tube.faces,
+                                                       max_edge=longest_edge)
+    return replace(case, contact=(Mesh(vertices, faces, cylinder.name),))
+
+
+def test_a_phase_that_starts_resting_on_an_obstacle_widens_the_barrier_downhill_first(strut_case):
+    # the place phase ends narrowed to d_hat on the strut (960 triangles); the twist phase then follows its path on
+    # the cushion: started at once from that state, out of balance under the wider barrier, its first step failed
+    # ten times and was taken for a fold (an event "twist: ... (fold); ... snaps downhill")
+    result = solve(faceted(strut_case, 60, 100.0), estimate_error=False)
+    strut, = (contact for contact in result.contacts if contact.name == "strut")
+    assert strut.gap.size > 0 and result.stable
+    assert not [event for event in result.events if event.startswith("twist:")]
+
+
+def test_a_widening_that_fails_follows_the_path_with_the_model_s_barrier(strut_case, without_cushion, monkeypatch):
+    def fails(props, clamps, state, model, **options):
+        return state, NewtonReport(False, 3, 1.0, -1, "no descent step found")
+
+    monkeypatch.setattr(cushion, "minimise_with_contact", fails)
+    result = solve(strut_case, estimate_error=False)
+    assert any(event.startswith("twist: the contact barrier did not widen") for event in result.events)
+    np.testing.assert_allclose(result.centerline, without_cushion.centerline, rtol=0.0, atol=1e-9)
 
 
 def test_a_roll_locked_on_the_cushion_is_another_problem(strut_case, without_cushion, monkeypatch):

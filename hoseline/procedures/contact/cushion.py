@@ -20,16 +20,22 @@ phase of the placement ends narrowed, before the end's and the fixed clips' roll
 torque-free angle: an angle found on the cushion belongs to a hose held off by it (locked there,
 the same case ended 0.057 mm away, on another equilibrium).
 
-Where a narrowing does not converge to a stable state, the event is logged and the path is
-followed again from its start with the model's own barrier: the slow path, never a result of the
-cushion that the model's barrier does not confirm.
+A phase that starts where the last one ended (the twist phase, resting on the strut at gaps below
+d_hat) is not in balance under the cushion, which pushes harder at those gaps: the barrier is first
+widened to the cushion under the path's first clamps by a walk downhill (minimise_with_contact;
+plain Newton meets an indefinite Hessian there and failed, the first step of the twist taken for a
+fold: ten failed solves and a false snap event on the issue's strut as 100 000 triangles).
+
+Where a narrowing or the widening does not converge to a stable state, the event is logged and the
+path is followed (again, from its start) with the model's own barrier: the slow path, never a result
+of the cushion that the model's barrier does not confirm.
 """
 
 from __future__ import annotations
 
 from typing import Callable
 
-from hoseline.mechanics.contact_newton import ContactModel, solve_with_contact
+from hoseline.mechanics.contact_newton import ContactModel, minimise_with_contact, solve_with_contact
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact, polish
@@ -38,6 +44,7 @@ from hoseline.procedures.placement.continuation import ContinuationLog, Progress
 CUSHION_RADII = 0.2  # the barrier distance along a placement path, in hose radii (1 mm for the thesis hose; on the
 # issue's case 0.06 r took 1.2 and 4.2 s, 0.5 r 0.87 and 4.6 s, 0.2 r 0.78 and 4.5 s: cylinder and mesh, one run each)
 NARROWING = 10.0  # the cushion is narrowed by this factor at a time at the end of a path
+WIDENING_ITERATIONS = 200  # of the downhill walk onto the cushion at a path's start (the issue's strut: 12)
 
 
 def follow_on_cushion(
@@ -62,8 +69,14 @@ def follow_on_cushion(
     if cushion <= model.activation:
         return follow_contact(phase, path, props, state, model, start=start, control=control, log=log,
                               progress=progress)[0]
-    cushioned = follow_contact(phase, path, props, state, model.with_activation(cushion), start=start, control=control,
-                               log=log, progress=progress)[0]
+    widened = _widened(path(start), props, state, model, cushion, control, log)
+    if widened is None:
+        log.events.append(f"{phase}: the contact barrier did not widen to the cushion of {cushion:.3g} mm at fraction "
+                          f"{start:.4f}; followed with the barrier of {model.activation:.3g} mm")
+        return follow_contact(phase, path, props, state, model, start=start, control=control, log=log,
+                              progress=progress)[0]
+    cushioned = follow_contact(phase, path, props, widened, model.with_activation(cushion), start=start,
+                               control=control, log=log, progress=progress)[0]
     clamps, narrowed, activation = path(1.0), cushioned, cushion
     while activation > model.activation:
         activation = max(activation / NARROWING, model.activation)
@@ -80,3 +93,17 @@ def follow_on_cushion(
             return follow_contact(phase, path, props, state, model, start=start, control=control, log=log,
                                   progress=progress)[0]
     return polish(props, clamps, narrowed, model, log)[0]
+
+
+def _widened(clamps: Clamps, props: RodProperties, state: RodState, model: ContactModel, cushion: float,
+             control: StepControl, log: ContinuationLog) -> RodState | None:
+    """The stable equilibrium under `clamps` with the barrier widened from the model's d_hat to `cushion` (mm), downhill
+    from `state` (minimise_with_contact); None if none is found.  `state` is an equilibrium with the model's barrier
+    (a phase starting where the last one ended narrowed), which the cushion's wider barrier pushes off what it rests
+    on; plain Newton from it meets an indefinite Hessian (a push of the wide barrier at a gap of thousandths of a mm
+    against the curvature of the distance) and fails (the twist phase of the issue's strut failed ten times in a row,
+    then was taken for a fold)."""
+    widened, report = minimise_with_contact(props, clamps, state, model.with_activation(cushion),
+                                            tolerance=control.path_tolerance, max_iterations=WIDENING_ITERATIONS)
+    log.iterations += report.iterations
+    return widened if report.converged and report.unstable_directions == 0 else None
