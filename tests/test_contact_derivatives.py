@@ -50,7 +50,8 @@ def _obstacles():
 
 def _energy(frames, h, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second):
     nodes = centerline(frames, np.zeros(3), h)
-    return node_terms(nodes, RADIUS, 1.7, D_HAT * 3, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
+    return node_terms(nodes, RADIUS, 1.7, D_HAT * 3, planes, balls, capsules, NO_TRIANGLES, NO_EDGES,
+                      np.zeros(0, np.int64), kinds, first, second)
 
 
 @pytest.mark.parametrize("kind", [STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT])
@@ -71,7 +72,8 @@ def test_node_gradient_and_hessian_against_finite_differences(kind):
     weight, d_hat = 1.7, 3 * D_HAT
 
     def terms(at):
-        return node_terms(at, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES, kinds, first, second)
+        return node_terms(at, RADIUS, weight, d_hat, planes, balls, capsules, NO_TRIANGLES, NO_EDGES,
+                          np.zeros(0, np.int64), kinds, first, second)
 
     assert_node_derivatives(terms, nodes, relative=True)
 

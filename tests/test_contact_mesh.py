@@ -27,8 +27,9 @@ TRIANGLE = np.array([[0.0, 0.0, 0.0], [4.0, 0.5, 0.3], [1.0, 3.5, -0.4]]) + [1.3
 NO_PLANES, NO_BALLS, NO_CAPSULES = np.zeros((0, 6)), np.zeros((0, 4)), np.zeros((0, 7))
 
 
-def _terms(nodes, triangles, edges, kinds, first, second):
-    return node_terms(nodes, RADIUS, WEIGHT, D_HAT, NO_PLANES, NO_BALLS, NO_CAPSULES, triangles, edges,
+def _terms(nodes, triangles, edges, kinds, first, second, planar=None):
+    planar = np.zeros(len(triangles), np.int64) if planar is None else planar
+    return node_terms(nodes, RADIUS, WEIGHT, D_HAT, NO_PLANES, NO_BALLS, NO_CAPSULES, triangles, edges, planar,
                       kinds, first, second)
 
 
@@ -102,6 +103,88 @@ def test_flat_edges_are_left_out_and_ridges_kept():
     sliver = np.vstack([floor, [[0.0, 0.0, 0.0]]])  # a zero-area triangle on the diagonal is left out
     with_sliver = pack_meshes([(sliver, np.array([[0, 1, 2], [0, 2, 3], [0, 4, 2]]))], [0])
     assert with_sliver.triangles.shape[0] == 2
+
+
+def _station_energy(mesh, station: np.ndarray) -> float:
+    """The barrier energy (b summed, mm^2) of one station's pairs with `mesh` (RADIUS, D_HAT), no segment pairs."""
+    from hoseline.mechanics.contact import barrier
+
+    nodes = np.array([station + 1e4, station])  # the held station 0 far off; the segment's pairs cut off
+    gaps = mesh.pairs(nodes, RADIUS, (np.full(2, D_HAT), np.full(1, -2.0 * RADIUS)))[3]
+    return sum(barrier(gap, D_HAT)[0] for gap in gaps)
+
+
+def _energy_steps(mesh, start: np.ndarray, direction: np.ndarray) -> list[float]:
+    """The steps in the station's energy along start + t direction, t in [0, 1], that do not shrink with the step:
+    each largest change between 100 samples narrowed by bisection to 1e-13 of the line."""
+    samples = np.linspace(0.0, 1.0, 101)
+    energies = [_station_energy(mesh, start + t * direction) for t in samples]
+    if not np.all(np.isfinite(energies)):  # the line enters the mesh: left out
+        return []
+    changes = np.abs(np.diff(energies))
+    steps = []
+    for i in np.flatnonzero(changes > 10.0 * np.median(changes) + 1e-12):
+        (low, e_low), (high, e_high) = (samples[i], energies[i]), (samples[i + 1], energies[i + 1])
+        while high - low > 1e-13:
+            middle = 0.5 * (low + high)
+            e_middle = _station_energy(mesh, start + middle * direction)
+            if abs(e_middle - e_low) > abs(e_high - e_middle):
+                high, e_high = middle, e_middle
+            else:
+                low, e_low = middle, e_middle
+        if abs(e_high - e_low) > 1e-9:
+            steps.append(abs(e_high - e_low))
+    return steps
+
+
+@pytest.mark.parametrize("shape", ["box", "subdivided box", "faceted tube", "tube with T-junctions"])
+def test_a_station_s_barrier_energy_has_no_step_anywhere_near_a_mesh(shape):
+    """Lines of stations past vertices, edges and faces of meshes with flat and sharp features: the summed barrier
+    changes continuously.  Before, a triangle's vertex on a sharp edge was paired wherever the station was in its
+    vertex region, also where a neighbour in its plane was nearer, and a pair appeared or left at a gap within
+    d_hat: steps of about half a pair's energy on boxes and faceted struts, Newton stalled on them (a placement past
+    a faceted strut failed "no descent step found")."""
+    import trimesh
+
+    meshes = {"box": lambda: trimesh.creation.box(extents=[20.0, 20.0, 20.0]),
+              "subdivided box": lambda: trimesh.creation.box(extents=[20.0, 20.0, 20.0]).subdivide().subdivide(),
+              "faceted tube": lambda: trimesh.creation.annulus(r_min=14.0, r_max=15.0, height=60.0, sections=24),
+              "tube with T-junctions": lambda: trimesh.Trimesh(*trimesh.remesh.subdivide_to_size(
+                  *(lambda tube: (tube.vertices, tube.faces))(trimesh.creation.cylinder(15.0, 60.0, sections=24)),
+                  max_edge=8.0))}
+    surface = meshes[shape]()
+    mesh = pack_meshes([(np.asarray(surface.vertices), np.asarray(surface.faces))], [0])
+    rng = np.random.default_rng(11)
+    steps, lines = [], 0
+    for corner in rng.choice(len(surface.vertices), size=40):
+        normal = surface.vertex_normals[corner]
+        start = surface.vertices[corner] + normal * (RADIUS + rng.uniform(0.2, 0.8) * D_HAT) + rng.normal(size=3)
+        direction = 2.0 * rng.normal(size=3)
+        if np.isfinite(_station_energy(mesh, start)) and np.isfinite(_station_energy(mesh, start + direction)):
+            lines += 1
+            steps += _energy_steps(mesh, start, direction)
+    assert lines > 20 and steps == []
+
+
+def test_a_packing_is_kept_by_content_for_new_problems_with_the_same_mesh(monkeypatch):
+    from hoseline.mechanics import contact_mesh
+
+    monkeypatch.setattr(contact_mesh, "_PACKED", type(contact_mesh._PACKED)())
+    vertices, faces = _grid_floor(4)
+    first = pack_meshes([(vertices, faces)], [0])
+    again = pack_meshes([(vertices.copy(), faces.copy())], [0])  # the same content, read again
+    assert again.triangles is first.triangles and again.triangle_tree[0] is first.triangle_tree[0]
+    assert again.leaf_lists is not first.leaf_lists  # each model keeps its own
+    moved = vertices.copy()
+    moved[7, 2] += 1e-9
+    other_faces = faces[:, [0, 2, 1]]  # the same triangles, the other way round
+    for changed in (pack_meshes([(moved, faces)], [0]), pack_meshes([(vertices, other_faces)], [0]),
+                    pack_meshes([(vertices, faces)], [1]), pack_meshes([(vertices, faces), (vertices, faces)], [0, 1])):
+        assert changed.triangles is not first.triangles
+    fresh = contact_mesh._packed_meshes([(moved, faces)], [0])
+    np.testing.assert_array_equal(pack_meshes([(moved, faces)], [0]).triangles, fresh.triangles)
+    assert pack_meshes([(vertices, faces)], [0]).triangles is not first.triangles  # four others since: forgotten
+    assert len(contact_mesh._PACKED) == contact_mesh.PACKED_KEPT
 
 
 # --- equilibria: a mesh floor is the plane, a faceted drum the cylinder, a box edge carries its share ---
@@ -190,6 +273,27 @@ def test_a_station_over_a_grid_floor_pairs_with_one_triangle_on_its_edges_and_ve
                     nodes = np.array([[-1000.0, 0.0, 100.0], [x + dx, y + dy, 5.001]])
                     kinds, _, _, gaps = mesh.pairs(nodes, 5.0, 1.0)
                     assert kinds.size == 1 and gaps[0] == pytest.approx(0.001, abs=1e-12), (x + dx, y + dy, gaps)
+
+
+def test_a_station_over_a_flat_edge_or_vertex_has_the_plane_s_energy_gradient_and_hessian():
+    # over a grid floor's diagonal or a vertex amid it (to rounding), the nearest triangle's closest feature is that
+    # edge or vertex; the distance to the floor is the plane's, flat along it: measured as the edge's or vertex's,
+    # its Hessian bent the barrier's push about the feature (a negative curvature of push / distance), and a heavy
+    # hose on a plate lost its stability where it had none
+    from hoseline.mechanics.contact import STATION_PLANE
+
+    mesh = pack_meshes([_grid_floor(4)], [0])  # 200 x 100 mm cells
+    plane = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
+    for x, y in ((-100.0, -50.0), (0.0, 0.0), (50.0, 25.0), (50.0 + 1e-13, 25.0), (-50.0, -25.0 - 1e-13)):
+        nodes = np.array([[-1000.0, 0.0, 100.0], [x, y, RADIUS + 0.4 * D_HAT]])
+        kinds, first, second, _ = mesh.pairs(nodes, RADIUS, D_HAT)
+        assert list(kinds) == [STATION_TRIANGLE]
+        on_mesh = node_terms(nodes, RADIUS, WEIGHT, D_HAT, NO_PLANES, NO_BALLS, NO_CAPSULES, mesh.triangles,
+                             mesh.edges, mesh.planar, kinds, first, second)
+        on_plane = node_terms(nodes, RADIUS, WEIGHT, D_HAT, plane, NO_BALLS, NO_CAPSULES, mesh.triangles, mesh.edges,
+                              mesh.planar, np.array([STATION_PLANE]), np.array([1]), np.array([0]))
+        for mine, plane_s in zip(on_mesh[:3], on_plane[:3]):
+            np.testing.assert_allclose(mine, plane_s, rtol=1e-9, atol=1e-9)
 
 
 def test_a_segment_across_a_straight_ridge_cut_into_rows_pairs_with_one_of_its_edges_at_the_joint():

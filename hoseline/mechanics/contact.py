@@ -194,14 +194,16 @@ def distance_terms(points, m, c, dc, free, used, r, rz, f_x, f_xx, f_xz):
 
 
 @njit(cache=True)
-def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node):
+def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node, planar):
     """The points, coefficients and free parameters of pair (kind, hose primitive i, obstacle primitive j).
 
     Fills points (4, 3), c (4,), dc (4, 2), free (2,) and node (4,), the station of each point or -1 for
     an obstacle point (the caller's arrays, reused from pair to pair); returns (m, the points used, the
     radius of the obstacle primitive (mm)); not for STATION_PLANE.  For SEGMENT_SEGMENT, j is the second
     hose segment; for STATION_TRIANGLE, i is a station and the columns of dc are the closest feature's
-    free directions (triangle_parameters).
+    free directions (triangle_parameters), both of the face's where that feature is one of the bits of
+    `planar` (1 << feature: an edge or vertex inside a flat patch, contact_mesh.MeshArrays.planar; the station
+    is then over the patch, whose distance is the plane's).
     """
     for a in range(4):
         c[a] = 0.0
@@ -219,6 +221,8 @@ def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, 
                                             corner_of(triangles, j, 2))
         node[0] = i
         c[0], c[1], c[2], c[3] = 1.0, -(1.0 - u - v), -u, -v
+        if (planar >> feature) & 1:
+            feature = FACE
         if feature == FACE or feature == EDGE_AB:  # d r / d u
             dc[1, 0], dc[2, 0] = 1.0, -1.0
             free[0] = True
@@ -333,7 +337,7 @@ def _pair_distance(kind, i, j, nodes, planes, balls, capsules, triangles, edges)
                                  point_of(nodes, j + 1)), 0.0
     points, c = np.zeros((4, 3)), np.zeros(4)
     m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, np.zeros((4, 2)),
-                              np.zeros(2, np.bool_), np.zeros(4, np.int64))
+                              np.zeros(2, np.bool_), np.zeros(4, np.int64), 0)  # the free directions unused
     r = np.zeros(3)
     for k in range(m):
         r += c[k] * points[k]
@@ -387,11 +391,13 @@ def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutof
 
 
 @njit(cache=True)
-def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, triangles, edges, kinds, first, second):
+def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, triangles, edges, planar, kinds, first,
+               second):
     """Barrier energy of the given pairs (N*mm), its gradient (N+1, 3) and Hessian (N+1, N+1, 3, 3) in the stations.
 
     weight: kappa h, N/mm (energy per mm^2 of barrier).  triangles (F, 3, 3), edges (E, 2, 3): the
-    corners of the mesh primitives (mm) that STATION_TRIANGLE and SEGMENT_EDGE pairs index.  Also per pair: the force on the hose
+    corners of the mesh primitives (mm) that STATION_TRIANGLE and SEGMENT_EDGE pairs index; planar (F,): each
+    triangle's features inside its flat patch (pair_geometry).  Also per pair: the force on the hose
     (N; for a self-contact pair, on the first segment), the closest points on the hose and on the
     other body (mm) and the gap (mm).
     """
@@ -424,7 +430,8 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
             on_other[p] = nodes[i] - (gap + hose_radius) * normal
             gaps[p] = gap
             continue
-        m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node)
+        m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node,
+                                  planar[j] if kind == STATION_TRIANGLE else 0)
         on_first = 1 if kind == STATION_TRIANGLE else 2  # the points of the (first) hose primitive
         used = 4 if kind == SEGMENT_SEGMENT else on_first  # the hose's points: the others are fixed
         d = distance_terms(points, m, c, dc, free, used, r, rz, d_x, d_xx, f_xz)

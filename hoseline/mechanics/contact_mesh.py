@@ -13,25 +13,21 @@ station-plane pairs of an analytic plane.
 Left out, so that a flat surface pushes only along its normal and each station counts once: an
 edge between two triangles in one plane that continue each other (a floor's or a box face's
 diagonal: over a flat region the distance of a point of a segment is linear along it, smallest at a
-station), and a triangle's edge and vertex regions at such flat features (the neighbour across is
-nearer: MeshArrays.features); likewise an edge's end where exactly two edges continue each other in
-a straight line (MeshArrays.corners).
-Over a flat region each station pairs with exactly one triangle, also on a flat edge or vertex (a
-hose lying along a grid line of a floor): each flat edge is given one orientation test, evaluated
-bit for bit alike for both its triangles with the opposite sign (from the edge's end nearer the
-station, so that near a vertex every edge there sees the same offset), and a triangle pairs at its
-face or at a flat feature only if the station is on its side of each of its flat edges
-(MeshArrays.flat_edges); on an edge itself (the test zero) the triangle on the side of a fixed
-direction w takes it, as if the station were moved by an infinitesimal w (simulation of simplicity),
-so at a vertex too one triangle takes it.  A triangle that takes a station its Voronoi regions put
-beyond a flat feature (by rounding) measures it from that feature, the plane's distance to rounding,
-so the energy does not jump where a station passes from one triangle to the next.  Deciding by each
-triangle's Voronoi regions and a distance tie alone left a band of 7e-5 mm (5 mm above the face)
-about each flat edge where a station paired with both triangles (a double barrier, an energy jump
-that stopped Newton on a floor of 50 x 25 mm cells).  The tests are in floating point: on a plane
-not along the axes, rounding can still decide differently within about 1e-15 mm of a vertex.
-A segment at a straight joint of two edges likewise pairs with one of them, by one side test on the
-joint's line shared by both (MeshArrays.joints), not by a distance tie.
+station), and likewise an edge's end where exactly two edges continue each other in a straight line
+(MeshArrays.corners).
+Patches.  The triangles joined across such flat edges form a patch, a planar polygon (a box face, a
+facet of a faceted cylinder, a whole floor).  A station pairs with the nearest triangle of each patch
+within reach (MeshArrays.patches): the distance to the patch is the smallest of its triangles', so it
+is counted once, changes continuously as the station passes from one triangle's region to the next
+(where the nearest triangle changes, both are equally near; over a flat edge or vertex both measure
+the same point of the plane), and pushes along the plane's normal over the patch.  Two patches meeting
+at a ridge each count the ridge (as IPC's point-triangle pairs do).  Session 22 replaced a rule by
+which each triangle decided alone (its face and its flat features by a side test on each flat edge,
+its vertices on sharp edges always): a vertex region reaches over the neighbours in the plane, so a
+pair at a vertex appeared or left at a gap within d_hat, steps of about half a pair's energy in the
+barrier near boxes' corners and faceted struts (tests/test_contact_mesh.py), where Newton stalled.
+A segment at a straight joint of two edges pairs with one of them, by one side test on the joint's
+line shared by both (MeshArrays.joints), not by a distance tie.
 Kept: boundary edges, ridges, valleys, edges of three or more triangles, folds.  Triangles of zero
 area (a line) are left out; their edges stay where other triangles border them.  Exactly
 coincident vertices are merged first (a STEP file's faces and an STL's triangles do not share theirs).
@@ -62,11 +58,16 @@ checks with the exact derivatives the barrier needs.
 
 from __future__ import annotations
 
+import hashlib
 import math
-from dataclasses import dataclass, field
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numba import njit
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 from hoseline.mechanics.bounding_volumes import (
     LEAF_SIZE,
@@ -82,7 +83,6 @@ from hoseline.mechanics.contact import (
     EDGE_AB,
     EDGE_AC,
     EDGE_BC,
-    FACE,
     SEGMENT_EDGE,
     STATION_TRIANGLE,
     VERTEX_A,
@@ -102,8 +102,10 @@ from hoseline.mechanics.proximity import (
 from hoseline.model.obstacles import has_area
 
 FLAT = 1e-9  # sine of the angle below which two triangles sharing an edge lie in one plane
-TIE_DIRECTIONS = np.array([[0.5257, 0.7236, 0.4472], [0.8017, -0.2673, 0.5345]])  # w, and w' for an edge along w (any fixed)
 COVERED, JOINT, CORNER = 0, 1, 2  # MeshArrays.corners: what an edge's end is
+PACKED_KEPT = 4  # packings of mesh sets kept for new problems with the same obstacles (pack_meshes)
+_PACKED: OrderedDict[bytes, MeshArrays] = OrderedDict()  # by content digest, the last used last
+_PACKED_LOCK = threading.Lock()  # the studio's server threads may pack at once
 LISTED_TRIANGLES = 2000  # meshes with fewer triangles are walked at every search in one call, without leaf lists (a
 # box lifted through the hose, tests/test_sweep_moving_contact.py: 0.37 s, 0.45 with lists, 0.36 before them)
 
@@ -117,15 +119,11 @@ class MeshArrays:
     """The triangle meshes of a contact model, packed for the kernels (mm), each mesh with its own trees.
 
     triangles (F, 3, 3): corners, in tree order, mesh after mesh.  normals (F, 3): unit normals.
-    features (F,): bit 1 << f set for each closest feature f (contact.FACE, EDGE_AB, ..., VERTEX_C) of the
-    triangle a station pairs with it at: its face, its kept edges, its vertices on kept edges; at its face and
-    its other (flat) features only where flat_edges give the station to it.
-    flat_edges (F, 3, 3, 3): for each edge of each triangle that is flat (left out), its ends p, q in the order
-    of their vertex indices and m, the sum of its two triangles' normals (shared by both, so that the test
-    ((q - p) x (x - e)) . m of a station x, e the end nearer x, is bit for bit the same from either); flat_sides
-    (F, 3, 2): the sign
-    s of that test on the triangle's side (0: not a flat edge) and, for a station on the edge (test zero),
-    +1 if the triangle takes it, else -1 (the sign of s ((q - p) x w) . m, TIE_DIRECTIONS).
+    patches (F,): the flat patch of each triangle (global over the meshes): triangles joined across flat
+    edges, the pieces of one planar face; a station pairs with the nearest triangle of each patch within
+    reach (mesh_pairs).  planar (F,): bit 1 << f (contact.EDGE_AB, ..., VERTEX_C) set for each feature f of the
+    triangle inside its patch, its flat edges and its vertices on no kept edge: a station whose nearest point of
+    the patch is there is over the patch, and its distance's derivatives are the plane's (contact.pair_geometry).
     triangle_tree: (lower (M, 3), upper (M, 3), children (M, 2), ranges (M, 2)) of every mesh's tree,
     node and item indices global.  triangle_roots (K,): the root node of each mesh's tree (-1: the mesh left out
     of the searches, contact_motion.only).
@@ -141,9 +139,8 @@ class MeshArrays:
     """
 
     triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
-    features: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
-    flat_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3, 3)))
-    flat_sides: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 2)))
+    patches: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    planar: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     triangle_tree: tuple = field(default_factory=_empty_tree)
     triangle_roots: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
@@ -179,14 +176,14 @@ class MeshArrays:
         station_cutoffs, segment_cutoffs = cutoffs
         if self.triangles.shape[0] < LISTED_TRIANGLES:  # a walk down a small tree costs less than keeping a list
             return walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles,
-                                     self.features, self.flat_edges, self.flat_sides, *self.triangle_tree,
+                                     self.patches, *self.triangle_tree,
                                      self.triangle_roots, self.edges, self.corners, self.joints, *self.edge_tree,
                                      self.edge_roots, every_feature)
         stations = nodes[1:]
         near_stations = self._leaves("stations", stations, stations, station_cutoffs[1:] + hose_radius, hose_radius)
         near_segments = self._leaves("segments", nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, hose_radius)
-        return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles, self.features,
-                          self.flat_edges, self.flat_sides, self.triangle_tree[3], *near_stations, self.edges,
+        return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles, self.patches,
+                          self.triangle_tree[3], *near_stations, self.edges,
                           self.corners, self.joints, self.edge_tree[3], *near_segments, every_feature)
 
     def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
@@ -251,17 +248,41 @@ class MeshArrays:
 
 
 def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) -> MeshArrays:
-    """MeshArrays of `meshes`, each (vertices (V, 3) mm, faces (F, 3) vertex indices), of the obstacles `owners`."""
+    """MeshArrays of `meshes`, each (vertices (V, 3) mm, faces (F, 3) vertex indices), of the obstacles `owners`.
+
+    The last PACKED_KEPT packings are kept by their content (a digest of every vertex, face and owner): a new
+    problem with the same obstacles (another hose length, a mesh file read again) takes them without building
+    the trees again (0.24 s for 100 000 triangles); each caller gets its own leaf lists."""
     if not meshes:
         return MeshArrays()
+    digest = hashlib.blake2b(np.asarray(owners, dtype=np.int64).tobytes())
+    for vertices, faces in meshes:
+        for array in (np.asarray(vertices, dtype=float), np.asarray(faces, dtype=np.int64)):
+            digest.update(repr(array.shape).encode())
+            digest.update(np.ascontiguousarray(array))
+    key = digest.digest()
+    with _PACKED_LOCK:
+        packed = _PACKED.get(key)
+        if packed is not None:
+            _PACKED.move_to_end(key)
+    if packed is None:
+        packed = _packed_meshes(meshes, owners)
+        with _PACKED_LOCK:
+            _PACKED[key] = packed
+            while len(_PACKED) > PACKED_KEPT:
+                _PACKED.popitem(last=False)
+    return replace(packed)  # its own (empty) leaf lists: an init=False field
+
+
+def _packed_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) -> MeshArrays:
+    """pack_meshes, without the kept packings."""
     parts = [_mesh_parts(vertices, faces) for vertices, faces in meshes]
     triangles, triangle_tree, triangle_roots, order = _forest([part[0] for part in parts])
     edges, edge_tree, edge_roots, edge_order = _forest([part[1] for part in parts])
     return MeshArrays(
         triangles=triangles,
-        features=np.concatenate([part[2] for part in parts])[order],
-        flat_edges=np.concatenate([part[4] for part in parts])[order],
-        flat_sides=np.concatenate([part[5] for part in parts])[order],
+        patches=np.concatenate([part[2] + offset for part, offset in zip(parts, _offsets(parts))])[order],
+        planar=np.concatenate([part[4] for part in parts])[order],
         normals=_unit_normals(triangles),
         triangle_tree=triangle_tree,
         triangle_roots=triangle_roots,
@@ -277,9 +298,9 @@ def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) 
 
 
 def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple:
-    """(triangles (F, 3, 3), kept edges (E, 2, 3), features (F,), (corners (E, 2), joints (E, 2, 3, 3)), flat_edges
-    (F, 3, 3, 3), flat_sides (F, 3, 2), as in MeshArrays) of one mesh: coincident vertices merged, zero-area
-    triangles and flat interior edges left out (see the module doc)."""
+    """(triangles (F, 3, 3), kept edges (E, 2, 3), patches (F,) numbered from 0, (corners (E, 2), joints (E, 2, 3, 3)),
+    planar (F,), as in MeshArrays) of one mesh: coincident vertices merged, zero-area triangles and flat interior edges left out,
+    the triangles joined across flat edges into patches (see the module doc)."""
     vertices, merged = np.unique(np.asarray(vertices, dtype=float), axis=0, return_inverse=True)
     faces = merged.reshape(-1)[np.asarray(faces, dtype=np.int64)]
     faces = faces[has_area(vertices[faces])]  # model.obstacles.Mesh refuses a mesh without any
@@ -307,34 +328,25 @@ def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple:
     flat = coplanar & continued
     keep[counts == 2] = ~flat
     kept_edges = ends[starts[keep]]
-    # which features of each triangle a station pairs at: over a flat edge or a vertex amid a flat region the
-    # neighbour across it is nearer, and its edge region would push the hose along the surface
+    # the patches: triangles joined across flat edges (scipy's connected components of that graph)
+    joined = coo_matrix((np.ones(int(flat.sum())), (owner[pairs[flat]], owner[pairs[flat] + 1])), shape=(count, count))
+    patches = connected_components(joined, directed=False)[1].astype(np.int64)
+    # each triangle's features inside its patch: its flat edges, and its vertices on no kept edge
     kept_record = np.empty(len(ends), bool)
     kept_record[order] = keep[np.cumsum(new_edge) - 1]
     on_kept_edge = np.zeros(len(vertices), bool)
     on_kept_edge[kept_edges.reshape(-1)] = True
-    always = np.stack([np.ones(count, bool), *kept_record.reshape(3, count)[[0, 2, 1]], *on_kept_edge[faces].T])
-    shifts = np.array([FACE, EDGE_AB, EDGE_AC, EDGE_BC, VERTEX_A, VERTEX_B, VERTEX_C])[:, None]
-    features = np.sum(always.astype(np.int64) << shifts, axis=0)
+    inside = np.stack([*~kept_record.reshape(3, count)[[0, 2, 1]], *~on_kept_edge[faces].T])  # ab, ca, bc; a, b, c
+    shifts = np.array([EDGE_AB, EDGE_AC, EDGE_BC, VERTEX_A, VERTEX_B, VERTEX_C])[:, None]
+    planar = np.sum(inside.astype(np.int64) << shifts, axis=0)
     edges = np.stack([vertices[kept_edges[:, 0]], vertices[kept_edges[:, 1]]], axis=1)
-    # the side of each flat edge each of its two triangles takes: (triangle, its edge 0 ab, 1 bc, 2 ca, opposite vertex)
-    sides = [(owner[pairs[flat] + k], order[pairs[flat] + k] // count, vertices[opposite[pairs[flat] + k]]) for k in (0, 1)]
-    flat_edges, flat_sides = _flat_edges(count, a[flat], b[flat], (n1 + n2)[flat], sides)
-    return corners, edges, features, _edge_corners(kept_edges, edges), flat_edges, flat_sides
+    return corners, edges, patches, _edge_corners(kept_edges, edges), planar
 
 
-def _flat_edges(count: int, p: np.ndarray, q: np.ndarray, m: np.ndarray, sides: list) -> tuple[np.ndarray, np.ndarray]:
-    """(flat_edges (count, 3, 3, 3), flat_sides (count, 3, 2)) as MeshArrays of the flat edges from p to q ((n, 3) mm,
-    in vertex index order) with the sums m of their triangles' normals; sides: for each of an edge's two triangles
-    (triangle (n,), edge slot (n,), opposite vertex (n, 3) mm)."""
-    flat_edges, flat_sides = np.zeros((count, 3, 3, 3)), np.zeros((count, 3, 2))
-    on_edge = np.einsum("ij,ij->i", np.cross(q - p, TIE_DIRECTIONS[0]), m)
-    on_edge = np.where(on_edge != 0.0, on_edge, np.einsum("ij,ij->i", np.cross(q - p, TIE_DIRECTIONS[1]), m))
-    for triangle, slot, vertex in sides:
-        side = np.sign(np.einsum("ij,ij->i", np.cross(q - p, vertex - p), m))
-        flat_edges[triangle, slot] = np.stack([p, q, m], axis=1)
-        flat_sides[triangle, slot] = np.column_stack([side, side * np.sign(on_edge)])
-    return flat_edges, flat_sides
+def _offsets(parts: list[tuple]) -> list[int]:
+    """The first global patch number of each mesh's parts (_mesh_parts), so that patches of two meshes differ."""
+    counts = [int(part[2].max()) + 1 if len(part[2]) else 0 for part in parts]
+    return list(np.cumsum([0, *counts[:-1]]))
 
 
 def _edge_corners(ends: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -394,34 +406,45 @@ def _forest(item_corners: list[np.ndarray]) -> tuple[np.ndarray, tuple, np.ndarr
 
 
 @njit(cache=True)
-def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges, flat_sides,
-               t_ranges, near_stations, station_leaves, edges, corners, joints, e_ranges, near_segments, segment_leaves,
-               every_feature):
+def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, patches, t_ranges, near_stations,
+               station_leaves, edges, corners, joints, e_ranges, near_segments, segment_leaves, every_feature):
     """Station-triangle and segment-edge pairs with a gap (mm) below the cutoff (mm) of their station or segment.
 
     nodes (N+1, 3) mm (station 0 is held: not paired); station_cutoffs (N+1,), segment_cutoffs (N,) mm.
+    patches (F,): each triangle's flat patch; a station pairs with the nearest triangle of each patch (the first
+    met of equally near ones), or with every triangle within its cutoff if every_feature.
     near_stations, station_leaves: the triangle tree's leaves within reach of stations 1..N (indexed from 0;
     _leaves_in_order, through leaf_lists.LeafLists); near_segments, segment_leaves: the edge tree's of each segment.
     Returns (kinds, first (station or segment), second (triangle or edge), gaps) as contact.pair_gaps.
     """
     kinds, first, second, gaps = [0 for _ in range(0)], [0 for _ in range(0)], [0 for _ in range(0)], [0.0 for _ in range(0)]
     found, leaves = near_stations, station_leaves
+    station, own = -1, 0  # the station whose pairs are being listed, and where they start
     for pair in range(found.shape[0]):
         k, leaf = found[pair] + 1, leaves[pair]
+        if k != station:
+            station, own = k, len(kinds)
         cutoff = station_cutoffs[k]
         x = point_of(nodes, k)
         for position in range(t_ranges[leaf, 0], t_ranges[leaf, 0] + t_ranges[leaf, 1]):
             a, b, c = corners_of(triangles, position)
-            u, v, feature = triangle_parameters(x, a, b, c)
+            u, v, _ = triangle_parameters(x, a, b, c)
             distance = 0.0
             for j in range(3):
                 distance += (x[j] - ((1.0 - u - v) * a[j] + u * b[j] + v * c[j])) ** 2
             gap = np.sqrt(distance) - hose_radius
             if not gap < cutoff:
                 continue
-            if not every_feature and (feature == FACE or not (features[position] >> feature) & 1):
-                if not _takes(x, flat_edges[position], flat_sides[position]):
-                    continue  # over a neighbour in its plane, or on the flat edge or vertex it gives to another
+            if not every_feature:
+                same = -1  # this station's pair with the patch, if listed
+                for listed in range(own, len(kinds)):
+                    if patches[second[listed]] == patches[position]:
+                        same = listed
+                        break
+                if same >= 0:
+                    if gap < gaps[same]:
+                        second[same], gaps[same] = position, gap
+                    continue
             kinds.append(STATION_TRIANGLE)
             first.append(k)
             second.append(position)
@@ -446,9 +469,9 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
 
 
 @njit(cache=True)
-def walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges,
-                      flat_sides, t_lower, t_upper, t_children, t_ranges, t_roots, edges, corners, joints, e_lower,
-                      e_upper, e_children, e_ranges, e_roots, every_feature):
+def walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, patches, t_lower, t_upper,
+                      t_children, t_ranges, t_roots, edges, corners, joints, e_lower, e_upper, e_children, e_ranges,
+                      e_roots, every_feature):
     """mesh_pairs with the leaves found by one walk down each tree (the triangles': t_*, the edges': e_*), in one
     call: for a small mesh, whose walks cost less than the calls around a leaf list."""
     stations = nodes[1:]
@@ -456,9 +479,9 @@ def walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, tria
                                      t_children, t_ranges, t_roots)
     near_segments = _leaves_in_order(nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, e_lower, e_upper,
                                      e_children, e_ranges, e_roots)
-    return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, features, flat_edges,
-                      flat_sides, t_ranges, near_stations[0], near_stations[1], edges, corners, joints, e_ranges,
-                      near_segments[0], near_segments[1], every_feature)
+    return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, patches, t_ranges,
+                      near_stations[0], near_stations[1], edges, corners, joints, e_ranges, near_segments[0],
+                      near_segments[1], every_feature)
 
 
 @njit(cache=True)
@@ -480,23 +503,6 @@ def _leaves_in_order(starts, ends, reaches, lower, upper, children, ranges, root
     last = ranges[leaf, 0].max() + 1 if leaf.shape[0] else 1
     order = np.argsort((segment * roots.shape[0] + mesh) * last + (last - 1 - ranges[leaf, 0]), kind="mergesort")
     return segment[order], leaf[order]
-
-
-@njit(cache=True)
-def _takes(x, flat_edges, flat_sides):
-    # whether the station x (mm) is on the triangle's side of each of its flat edges, on an edge by the tie rule;
-    # x is taken from the edge's end nearer to it, so that near a vertex every edge there sees the same x - vertex
-    for e in range(3):
-        if flat_sides[e, 0] != 0.0:
-            p, q, m = flat_edges[e, 0], flat_edges[e, 1], flat_edges[e, 2]
-            end = p if _squared_distance(x, p) <= _squared_distance(x, q) else q
-            # (q - p) x (x - end) . m in scalars, in np.cross's order (the tie rule needs the same bits everywhere)
-            ux, uy, uz = q[0] - p[0], q[1] - p[1], q[2] - p[2]
-            wx, wy, wz = x[0] - end[0], x[1] - end[1], x[2] - end[2]
-            side = flat_sides[e, 0] * ((uy * wz - uz * wy) * m[0] + (uz * wx - ux * wz) * m[1] + (ux * wy - uy * wx) * m[2])
-            if side < 0.0 or (side == 0.0 and flat_sides[e, 1] < 0.0):
-                return False
-    return True
 
 
 @njit(cache=True)

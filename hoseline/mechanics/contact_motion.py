@@ -3,12 +3,10 @@
 Carrying (moved_model).  An obstacle on a body moves with the body's pose (model/motion.Pose):
 plane points, ball centres, capsule axes and mesh corners as points, plane and triangle normals as
 directions.  A mesh keeps what was worked out from its triangles (contact_mesh.pack_meshes: its kept
-edges, features, the sides of its flat edges, its edges' corners), since a rigid motion keeps every
-distance and side (the tie direction of a flat edge turns with the body, so both its triangles
-still decide alike), and the topology of its bounding-volume trees, whose boxes are refitted to the
-moved items (bounding_volumes.refit_boxes: O(items), no rebuild).  Points are carried element by
-element, so a point stored twice (a flat edge for each of its two triangles, a joint for each of
-its two edges) stays the same bits, as their tests need.
+edges, flat patches, its edges' corners), since a rigid motion keeps every distance and side, and
+the topology of its bounding-volume trees, whose boxes are refitted to the moved items
+(bounding_volumes.refit_boxes: O(items), no rebuild).  Points are carried element by element, so a
+point stored twice (a joint for each of its two edges) stays the same bits, as their tests need.
 
 The move check (move_is_clear).  The contact Newton starts from a state that penetrates nothing, and
 its step filter keeps every later state on the same side of every obstacle.  Between two solves (a
@@ -88,7 +86,7 @@ def _moved_meshes(mesh: MeshArrays, poses: Sequence[Pose | None]) -> MeshArrays:
     """`mesh` with mesh m carried rigidly by poses[m] (None: it stays), its trees refitted."""
     if all(pose is None for pose in poses):
         return mesh
-    triangles, normals, flat_edges = mesh.triangles.copy(), mesh.normals.copy(), mesh.flat_edges.copy()
+    triangles, normals = mesh.triangles.copy(), mesh.normals.copy()
     edges, joints = mesh.edges.copy(), mesh.joints.copy()
     triangle_boxes = (mesh.triangle_tree[0].copy(), mesh.triangle_tree[1].copy())
     edge_boxes = (mesh.edge_tree[0].copy(), mesh.edge_tree[1].copy())
@@ -97,12 +95,10 @@ def _moved_meshes(mesh: MeshArrays, poses: Sequence[Pose | None]) -> MeshArrays:
             continue
         t, e = _items_of(mesh.triangle_mesh, m), _items_of(mesh.edge_mesh, m)
         triangles[t], normals[t] = carried(triangles[t], pose), turned(normals[t], pose)
-        flat_edges[t, :, :2] = carried(flat_edges[t, :, :2], pose)  # each flat edge's ends p, q
-        flat_edges[t, :, 2] = turned(flat_edges[t, :, 2], pose)  # and normal sum m (edges not flat: not read)
         edges[e], joints[e] = carried(edges[e], pose), carried(joints[e], pose)
         _refit(triangles, triangle_boxes, mesh.triangle_tree, mesh.triangle_roots, m)
         _refit(edges, edge_boxes, mesh.edge_tree, mesh.edge_roots, m)
-    return replace(mesh, triangles=triangles, normals=normals, flat_edges=flat_edges, edges=edges, joints=joints,
+    return replace(mesh, triangles=triangles, normals=normals, edges=edges, joints=joints,
                    triangle_tree=(*triangle_boxes, *mesh.triangle_tree[2:]),
                    edge_tree=(*edge_boxes, *mesh.edge_tree[2:]))
 

@@ -100,7 +100,7 @@ class ContactModel:
     def terms(self, nodes: np.ndarray, weight: float, kinds, first, second):
         """contact.node_terms of the pairs (kinds, first, second) with this model's obstacles; weight: kappa h, N/mm."""
         return node_terms(nodes, self.hose_radius, weight, self.activation, self.planes, self.balls, self.capsules,
-                          self.mesh.triangles, self.mesh.edges, kinds, first, second)
+                          self.mesh.triangles, self.mesh.edges, self.mesh.planar, kinds, first, second)
 
     def with_activation(self, activation: float) -> ContactModel:
         """The same obstacles and reference pressure (kappa d_hat) with the barrier acting across `activation` mm."""
