@@ -436,8 +436,8 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
             if not gap < cutoff:
                 continue
             if not every_feature:
-                same = -1  # this station's pair with the patch, if listed
-                for listed in range(own, len(kinds)):
+                same = -1  # this station's pair with the patch, if listed (the last listed first: a leaf's
+                for listed in range(len(kinds) - 1, own - 1, -1):  # triangles are neighbours, often in one patch)
                     if patches[second[listed]] == patches[position]:
                         same = listed
                         break
