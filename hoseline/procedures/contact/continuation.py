@@ -39,6 +39,8 @@ STEP_HALVINGS = 10  # of a Newton step within a continuation step: a step that n
 LAST_STEP_HALVINGS = 30  # for the smallest step, before the branch is judged to end in a fold
 MOST_SNAPS = 100  # of one path: a path that keeps snapping is not being followed (a coarse hose coiling on itself
 # crept on by hundreds of tiny snaps for minutes in the fuzzing campaign): it fails, saying so
+MOST_ITERATIONS = 20_000  # Newton iterations of one path: a path beyond them creeps (the fuzzing campaign's soft hose
+# of 250 mm segments took 222 785 in 75 s before it failed; the issue's strut takes 579, the plectoneme 1265)
 SMALLEST_MOVE = 1e-9  # of the path: the shortest step the move check of moving obstacles halves down to (an obstacle
 # pushing the hose may move less than the gap, d_hat / 2 or less, per step until there is a prediction)
 
@@ -65,8 +67,9 @@ def follow_contact(
     neither is admitted the step is halved.  log: if given, its iteration and step counters grow and
     every snap (loss of stability or fold) is recorded in log.events.  progress: optional
     callable(phase, fraction) after each step.  Raises PlacementError with the phase, the fraction and
-    Newton's message when the path cannot be followed, when it snaps more than MOST_SNAPS times, or when
-    the obstacles cannot move on without passing through the hose (no admitted step longer than SMALLEST_MOVE).
+    Newton's message when the path cannot be followed, when it snaps more than MOST_SNAPS times or takes more
+    than MOST_ITERATIONS Newton iterations, or when the obstacles cannot move on without passing through the
+    hose (no admitted step longer than SMALLEST_MOVE).
     """
     moving = model if isinstance(model, ObstaclePath) else None
     clamps_now, placed = path(start), moving.at(start) if moving is not None else None
@@ -99,6 +102,13 @@ def follow_contact(
         iterations += report.iterations
         if log is not None:
             log.iterations += report.iterations
+        if iterations > MOST_ITERATIONS:
+            raise PlacementError(
+                f"placement phase '{phase}' with contact failed at fraction {t:.4f}: its path took more than "
+                f"{MOST_ITERATIONS} Newton iterations (the contact Newton converges too slowly for the path's steps "
+                f"to grow: a barrier far stiffer than the hose, segments {props.segment_length:.3g} mm long for a hose "
+                f"of outer radius {model_radius(model):.3g} mm, stiffness up to {props.largest_stiffness:.3g} N*mm^2); "
+                "try more segments, or place without the obstacles or self-contact and read the clearance")
         if report.converged and report.unstable_directions != 0:  # lost stability between t and t_next
             start_from, what = trial, (f"stability lost between fractions {t:.4f} and {t_next:.4f} "
                                        f"({report.unstable_directions} unstable direction(s))")
