@@ -27,10 +27,9 @@ TRIANGLE = np.array([[0.0, 0.0, 0.0], [4.0, 0.5, 0.3], [1.0, 3.5, -0.4]]) + [1.3
 NO_PLANES, NO_BALLS, NO_CAPSULES = np.zeros((0, 6)), np.zeros((0, 4)), np.zeros((0, 7))
 
 
-def _terms(nodes, triangles, edges, kinds, first, second, planar=None):
-    planar = np.zeros(len(triangles), np.int64) if planar is None else planar
-    return node_terms(nodes, RADIUS, WEIGHT, D_HAT, NO_PLANES, NO_BALLS, NO_CAPSULES, triangles, edges, planar,
-                      kinds, first, second)
+def _terms(nodes, triangles, edges, kinds, first, second):
+    return node_terms(nodes, RADIUS, WEIGHT, D_HAT, NO_PLANES, NO_BALLS, NO_CAPSULES, triangles, edges,
+                      np.zeros(len(triangles), np.int64), kinds, first, second)
 
 
 def _check_against_finite_differences(nodes, triangles, edges, kind, first, second):
@@ -146,13 +145,14 @@ def test_a_station_s_barrier_energy_has_no_step_anywhere_near_a_mesh(shape):
     a faceted strut failed "no descent step found")."""
     import trimesh
 
-    meshes = {"box": lambda: trimesh.creation.box(extents=[20.0, 20.0, 20.0]),
-              "subdivided box": lambda: trimesh.creation.box(extents=[20.0, 20.0, 20.0]).subdivide().subdivide(),
-              "faceted tube": lambda: trimesh.creation.annulus(r_min=14.0, r_max=15.0, height=60.0, sections=24),
-              "tube with T-junctions": lambda: trimesh.Trimesh(*trimesh.remesh.subdivide_to_size(
-                  *(lambda tube: (tube.vertices, tube.faces))(trimesh.creation.cylinder(15.0, 60.0, sections=24)),
-                  max_edge=8.0))}
-    surface = meshes[shape]()
+    if shape == "tube with T-junctions":  # each triangle cut alone until no edge is longer than 8 mm
+        tube = trimesh.creation.cylinder(15.0, 60.0, sections=24)
+        surface = trimesh.Trimesh(*trimesh.remesh.subdivide_to_size(tube.vertices, tube.faces, max_edge=8.0))
+    elif shape == "faceted tube":
+        surface = trimesh.creation.annulus(r_min=14.0, r_max=15.0, height=60.0, sections=24)
+    else:
+        surface = trimesh.creation.box(extents=[20.0, 20.0, 20.0])
+        surface = surface.subdivide().subdivide() if shape == "subdivided box" else surface
     mesh = pack_meshes([(np.asarray(surface.vertices), np.asarray(surface.faces))], [0])
     rng = np.random.default_rng(11)
     steps, lines = [], 0

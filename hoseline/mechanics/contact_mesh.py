@@ -176,15 +176,14 @@ class MeshArrays:
         station_cutoffs, segment_cutoffs = cutoffs
         if self.triangles.shape[0] < LISTED_TRIANGLES:  # a walk down a small tree costs less than keeping a list
             return walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles,
-                                     self.patches, *self.triangle_tree,
-                                     self.triangle_roots, self.edges, self.corners, self.joints, *self.edge_tree,
-                                     self.edge_roots, every_feature)
+                                     self.patches, *self.triangle_tree, self.triangle_roots, self.edges, self.corners,
+                                     self.joints, *self.edge_tree, self.edge_roots, every_feature)
         stations = nodes[1:]
         near_stations = self._leaves("stations", stations, stations, station_cutoffs[1:] + hose_radius, hose_radius)
         near_segments = self._leaves("segments", nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, hose_radius)
         return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles, self.patches,
-                          self.triangle_tree[3], *near_stations, self.edges,
-                          self.corners, self.joints, self.edge_tree[3], *near_segments, every_feature)
+                          self.triangle_tree[3], *near_stations, self.edges, self.corners, self.joints,
+                          self.edge_tree[3], *near_segments, every_feature)
 
     def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
                      bound: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -252,7 +251,7 @@ def pack_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int]) 
 
     The last PACKED_KEPT packings are kept by their content (a digest of every vertex, face and owner): a new
     problem with the same obstacles (another hose length, a mesh file read again) takes them without building
-    the trees again (0.24 s for 100 000 triangles); each caller gets its own leaf lists."""
+    the trees again (0.18 s for 100 000 triangles); each caller gets its own leaf lists."""
     if not meshes:
         return MeshArrays()
     digest = hashlib.blake2b(np.asarray(owners, dtype=np.int64).tobytes())
@@ -299,8 +298,8 @@ def _packed_meshes(meshes: list[tuple[np.ndarray, np.ndarray]], owners: list[int
 
 def _mesh_parts(vertices: np.ndarray, faces: np.ndarray) -> tuple:
     """(triangles (F, 3, 3), kept edges (E, 2, 3), patches (F,) numbered from 0, (corners (E, 2), joints (E, 2, 3, 3)),
-    planar (F,), as in MeshArrays) of one mesh: coincident vertices merged, zero-area triangles and flat interior edges left out,
-    the triangles joined across flat edges into patches (see the module doc)."""
+    planar (F,), as in MeshArrays) of one mesh: coincident vertices merged, zero-area triangles and flat interior
+    edges left out, the triangles joined across flat edges into patches (see the module doc)."""
     vertices, merged = np.unique(np.asarray(vertices, dtype=float), axis=0, return_inverse=True)
     faces = merged.reshape(-1)[np.asarray(faces, dtype=np.int64)]
     faces = faces[has_area(vertices[faces])]  # model.obstacles.Mesh refuses a mesh without any

@@ -99,8 +99,7 @@ def _moved_meshes(mesh: MeshArrays, poses: Sequence[Pose | None]) -> MeshArrays:
         _refit(triangles, triangle_boxes, mesh.triangle_tree, mesh.triangle_roots, m)
         _refit(edges, edge_boxes, mesh.edge_tree, mesh.edge_roots, m)
     return replace(mesh, triangles=triangles, normals=normals, edges=edges, joints=joints,
-                   triangle_tree=(*triangle_boxes, *mesh.triangle_tree[2:]),
-                   edge_tree=(*edge_boxes, *mesh.edge_tree[2:]))
+                   triangle_tree=(*triangle_boxes, *mesh.triangle_tree[2:]), edge_tree=(*edge_boxes, *mesh.edge_tree[2:]))
 
 
 def _items_of(owner_mesh: np.ndarray, m: int) -> slice:
