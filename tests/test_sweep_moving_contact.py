@@ -160,3 +160,25 @@ def test_the_studio_timeline_says_it_does_not_move_contact_obstacles():
     with pytest.raises(StudioError, match=r"\[contact\] obstacles move with bodies.*run the sweep"):
         session.apply(Target(type="set", seq=1, pose=1))
     assert session.sweep_to_run().contact_bodies == ("arm",)  # the run moves them
+
+
+def test_a_snap_that_finds_no_stable_state_says_where_the_hose_was_pressed_before_the_obstacle_moved_on(monkeypatch):
+    """The plate lifted through the hose loses stability on the way; where no stable state is found downhill, the
+    message names the hardest push where the path last reached, under the obstacle as it was there (before, under
+    the plate moved on: "inf N, gap -0.032 mm", the hose inside it)."""
+    import re
+
+    from hoseline.mechanics.newton import NewtonReport
+    from hoseline.procedures.contact import continuation
+    from hoseline.procedures.placement.continuation import PlacementError
+
+    def fails(props, clamps, state, model, **options):
+        return state, NewtonReport(False, 1000, 1e-3, -1, "iteration limit reached")
+
+    monkeypatch.setattr(continuation, "minimise_with_contact", fails)
+    plate = {"kind": "box", "center": [0.0, 0.0, 0.0], "size": [60.0, 200.0, 1.0]}
+    with pytest.raises(PlacementError) as failure:
+        run_sweep(sweep_from_dict(sagging(plate, rise=100.0, steps=1)))
+    push, gap = re.search(r"pressed hardest against 'lifter' at \w+ \d+ \(([^ ]+) N, gap ([^ ]+) mm\)",
+                          str(failure.value)).groups()
+    assert np.isfinite(float(push)) and float(gap) > 0.0

@@ -129,7 +129,7 @@ def follow_contact(
                     f"along an obstacle); segments {h:.3g} mm long for a hose of outer radius {model_radius(model):.3g} mm"
                     " may be too coarse to follow it: try more segments, less twist or obstacles further from the path")
             trial, used = _snap(phase, clamps, props, state, start_from, model_next, tolerance, t, t_next, what,
-                                report, log)
+                                report, log, (clamps_now, placed.model if moving is not None else model))
             iterations += used
             dt = min(control.first, 1.0 - t_next)
         previous = (t, state) if start_from is None else None  # no secant across a snap
@@ -195,9 +195,11 @@ def hardest_push(props: RodProperties, clamps: Clamps, state: RodState, model: C
 
 def _snap(phase: str, clamps: Clamps, props: RodProperties, before: RodState, start_from: RodState,
           model: ContactModel, tolerance: float, t: float, t_next: float, what: str, failure: NewtonReport,
-          log: ContinuationLog | None) -> tuple[RodState, int]:
+          log: ContinuationLog | None, reached: tuple[Clamps, ContactModel]) -> tuple[RodState, int]:
     """The stable equilibrium downhill of `start_from` under `clamps` (the snap at fraction t_next), and the
-    Newton iterations used; the event goes to the log.  Raises PlacementError when there is none."""
+    Newton iterations used; the event goes to the log.  Raises PlacementError when there is none, saying where
+    `before` is pressed hardest under `reached`, the clamps and contact model at fraction t (obstacles that move
+    along the path have moved on by t_next, into where the hose was)."""
     relaxed, report = minimise_with_contact(props, clamps, start_from, model, tolerance=tolerance,
                                             max_iterations=DOWNHILL_ITERATIONS)
     if log is not None:
@@ -208,7 +210,7 @@ def _snap(phase: str, clamps: Clamps, props: RodProperties, before: RodState, st
             f"placement phase '{phase}' with contact failed at fraction {t_next:.4f} (last converged {t:.4f}): "
             f"residual {failure.residual:.2e} ({problem}), and no stable equilibrium was found downhill "
             f"({report.message or f'{report.unstable_directions} unstable direction(s)'})"
-            + hardest_push(props, clamps, before, model))
+            + hardest_push(props, reached[0], before, reached[1]))
     if report.message == NEUTRAL_MODE:  # no snap: the step only looked unstable
         return relaxed, report.iterations
     h = props.segment_length
