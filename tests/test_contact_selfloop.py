@@ -24,12 +24,16 @@ from scipy.special import j0
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.mechanics.contact_newton import (
     ContactModel,
+    _kkt_step,
+    _multipliers,
     evaluate_contact,
+    merit,
+    merit_model,
     minimise_with_contact,
     minimum_gap,
     solve_with_contact,
 )
-from hoseline.mechanics.newton import RodProperties, solve_equilibrium
+from hoseline.mechanics.newton import RodProperties, apply_step, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.mechanics.rotations import frame_from_tangent
 from hoseline.procedures.contact.continuation import follow_contact
@@ -109,6 +113,61 @@ def test_downhill_mode_leaves_a_saddle_for_a_stable_state_of_lower_energy_on_the
     assert 0.0 < minimum_gap(props, clamps, relaxed, model) < model.activation  # it rests on the floor
     assert np.min(nodes[:, 2]) < -6.0 + radius + model.activation
     again, check = solve_with_contact(props, clamps, relaxed, model, tolerance=1e-9)  # an equilibrium, as it is
+    assert check.converged and check.iterations == 0
+
+
+def _lowered_arch(d_hat):
+    """(props, the arch in equilibrium, its clamps with the end fitting lowered by d_hat mm): a state that violates the
+    end's position constraint by d_hat."""
+    segments, length = 40, 200.0
+    frames, tip = _bowed(segments, length, 0.9, 1)  # one bump up: the stable buckled arch
+    props = RodProperties(np.array([1e5, 1e5, 8e4]), length / segments, segments)
+    arch, report = solve_equilibrium(props, Clamps(np.zeros(3), AXIS.copy(), tip, AXIS.copy(), False, np.zeros(3)),
+                                     RodState(frames, np.zeros(3)))
+    assert report.converged
+    return props, arch, Clamps(np.zeros(3), AXIS.copy(), tip - [0.0, 0.0, d_hat], AXIS.copy(), False, np.zeros(3))
+
+
+@pytest.mark.parametrize("sigma", [0.0, 1e3])
+def test_the_downhill_merit_model_predicts_the_merit_of_a_step_cut_short(sigma):
+    """The downhill mode's model of its merit (merit_model) against the merit itself (merit) along a KKT step from
+    a state off its constraint, cut to alpha (as the step filter cuts it), agree to 1 %: the arch is near enough to
+    quadratic over the step.  Counting the constraint's whole fall for a cut step (the rule before) promised about
+    1 / (alpha (2 - alpha)) times the fall, and the walk gave up at a snap of the plectoneme (its path followed
+    with other steps)."""
+    props, arch, lowered = _lowered_arch(0.5)
+    model = ContactModel(2.0, 0.5, 2.0)  # nothing to touch
+    system = evaluate_contact(props, lowered, arch, model)
+    step, force_step, _ = _kkt_step(system, sigma)
+    multipliers = _multipliers(lowered, arch)
+    whole = merit_model(system, 1.0, step, 0.0, 1.0)[0]  # the Lagrangian's part alone (the penalty ~0)
+    weighty = 4.0 * abs(whole) / float(system.constraint @ system.constraint)  # the penalty's part as large, or more
+    errors = []
+    for alpha in (0.5, 0.1, 0.01):
+        predicted, penalty = merit_model(system, alpha, alpha * step, weighty, 1.0)
+        trial = evaluate_contact(props, lowered, apply_step(props, lowered, arch, alpha * step, alpha * force_step),
+                                 model)
+        actual = merit(trial, multipliers, penalty) - merit(system, multipliers, penalty)
+        assert predicted < 0.0 and actual < 0.0
+        errors.append(abs(actual / predicted - 1.0))
+    assert max(errors) < 0.01, errors
+
+
+def test_downhill_mode_restores_the_clamps_where_that_brings_the_hose_into_the_barrier():
+    """A step of the downhill mode restores the end's position constraint (its part -J^T (J J^T)^-1 c, which no
+    shift of the Hessian shortens); where that carries the hose into the barrier of an obstacle, the step must be
+    shortened, not only shifted: an arch over a floor, its end fitting lowered by d_hat towards the floor, relaxes
+    onto it (the shift alone grew to 1e26 and gave up: "no descent step found")."""
+    radius, d_hat = 2.0, 0.5
+    props, arch, lowered = _lowered_arch(d_hat)
+    floor = ContactModel(radius, d_hat, 2.0, planes=np.array([[0.0, 0.0, -(radius + 1.5 * d_hat), 0.0, 0.0, 1.0]]))
+    relaxed, report = minimise_with_contact(props, lowered, arch, floor)
+    assert report.converged and report.unstable_directions == 0, report
+    assert np.min(_tangent_eigenvalues(props, lowered, relaxed, floor)) > 0.0
+    np.testing.assert_allclose(centerline(relaxed.frames, np.zeros(3), props.segment_length)[-1], lowered.end_point,
+                               atol=1e-9)
+    assert 0.0 < minimum_gap(props, lowered, relaxed, floor) < d_hat  # the end's neighbours rest on the floor
+    again, check = solve_with_contact(props, lowered, relaxed, floor, tolerance=1e-9)
     assert check.converged and check.iterations == 0
 
 

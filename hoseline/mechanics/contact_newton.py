@@ -499,8 +499,11 @@ def minimise_with_contact(
     accepted (after the step filter) only if the merit, the total energy with the barrier minus
     the multipliers times the constraint plus a penalty on the constraint, falls by at least a
     tenth of the quadratic model's prediction; sigma shrinks after good steps and grows after poor
-    ones, so the method ends as plain Newton at a stable minimum.  Returns the final state and a
-    report as solve_with_contact; tolerance: relative residual.
+    ones, so the method ends as plain Newton at a stable minimum.  A step's part that restores the
+    constraints (-J^T (J J^T)^-1 c) does not shorten as sigma grows: once sigma dominates the
+    Hessian's diagonal, a refused step is also halved (where restoring the end's position carries the
+    hose into an obstacle's barrier, sigma alone grew without end and the walk gave up).  Returns the
+    final state and a report as solve_with_contact; tolerance: relative residual.
     """
     with one_blas_thread():
         return _minimise_with_contact(props, clamps, state, model, tolerance, max_iterations)
@@ -516,6 +519,31 @@ def _multipliers(clamps: Clamps, state: RodState) -> np.ndarray:
 def _hessian_times(system: ContactSystem, step: np.ndarray) -> np.ndarray:
     """H step with H = band + columns diag(signs) columns^T (the unshifted Hessian)."""
     return banded_matvec(system.band, step).reshape(-1) + system.columns @ (system.signs * (system.columns.T @ step))
+
+
+def merit(system: ContactSystem, multipliers: np.ndarray, penalty: float) -> float:
+    """The downhill mode's merit at a state: its energy with the barrier, less the multipliers (those of the state
+    the step starts from, N) times the constraint, plus penalty (N/mm) / 2 times the constraint squared (N*mm)."""
+    return system.energy - float(multipliers @ system.constraint) + 0.5 * penalty * float(
+        system.constraint @ system.constraint)
+
+
+def merit_model(system: ContactSystem, alpha: float, step: np.ndarray, penalty: float,
+                diag_scale: float) -> tuple[float, float]:
+    """(the predicted change of the merit, the penalty) for `step`, alpha times a KKT step from `system`'s state.
+
+    The quadratic model of the Lagrangian, g.step + step.H step / 2, plus the penalty's change on the linearised
+    constraint: the KKT step's constraint rows give J step = -alpha c, so c goes to (1 - alpha) c and |c|^2 falls by
+    alpha (2 - alpha) |c|^2 (counting the whole fall for a step the step filter cut promised a fall the merit could
+    not give: the walk gave up at a snap of the plectoneme of tests/test_contact_selfloop.py, its path followed with
+    a check of each step tried in session 23).
+    The penalty is raised where needed so that the model falls (a tiny margin of diag_scale, N*mm/rad^2, above).
+    """
+    quadratic = float(system.grad @ step + 0.5 * step @ _hessian_times(system, step))
+    restored = alpha * (2.0 - alpha) * float(system.constraint @ system.constraint)
+    if restored > 0.0:
+        penalty = max(penalty, 2.0 * max(quadratic, 0.0) / restored + 1e-8 * diag_scale)
+    return quadratic - 0.5 * penalty * restored, penalty
 
 
 NEUTRAL_MODE = "unstable by the pivot count only: the lowest eigenvalue is zero to rounding (neutral)"
@@ -606,8 +634,8 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
             break
         plain_newton = unstable == 0 and sigma == 0.0 and system.residual < 1e-6 and np.all(np.isfinite(step))
         multipliers = _multipliers(clamps, state)
-        base_constraint = float(system.constraint @ system.constraint)
         accepted = None
+        reach = 1.0  # the largest fraction of the step tried: halved after a refusal once the shift dominates
         for _ in range(40):
             if not plain_newton and (sigma > 0.0 or unstable != 0 or not np.all(np.isfinite(step))):
                 sigma = max(sigma, sigma_floor)
@@ -616,7 +644,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
                     sigma *= 10.0
                     continue
             watch = step_filter(props, clamps, state, step, model)
-            alpha = watch.limit
+            alpha = min(watch.limit, reach)
             trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
             while not watch.admits(props, clamps, trial, model, alpha) and alpha > 1e-9:
                 alpha *= 0.5
@@ -628,14 +656,9 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
                     break
                 plain_newton, sigma = False, sigma_floor
                 continue
-            scaled = alpha * step
-            quadratic = float(system.grad @ scaled + 0.5 * scaled @ _hessian_times(system, scaled))
-            if base_constraint > 0.0:
-                penalty = max(penalty, 2.0 * max(quadratic, 0.0) / base_constraint + 1e-8 * diag_scale)
-            predicted = quadratic - 0.5 * penalty * base_constraint
-            base = system.energy - multipliers @ system.constraint + 0.5 * penalty * base_constraint
-            actual = (trial_system.energy - multipliers @ trial_system.constraint
-                      + 0.5 * penalty * float(trial_system.constraint @ trial_system.constraint) - base)
+            predicted, penalty = merit_model(system, alpha, alpha * step, penalty, diag_scale)
+            base = merit(system, multipliers, penalty)
+            actual = merit(trial_system, multipliers, penalty) - base
             rounding = 1e-13 * (abs(base) + diag_scale)
             if predicted < -rounding:
                 ratio = actual / predicted
@@ -646,6 +669,8 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
                     sigma = 0.0 if sigma <= 4.0 * sigma_floor else 0.25 * sigma
                 accepted = trial, trial_system
                 break
+            if sigma >= diag_scale:
+                reach = 0.5 * alpha
             sigma = max(4.0 * sigma, 1e-4 * diag_scale)
         if accepted is None:
             return state, NewtonReport(False, iteration + 1, system.residual, unstable, "no descent step found")
