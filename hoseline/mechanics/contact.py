@@ -22,7 +22,9 @@ of the closest feature (two in the face, one along an edge, none at a vertex: tr
 the envelope theorem and the implicit function theorem give
     f_X = df/dX at z*,   f_XX = d2f/dX2 - f_Xz f_zz^-1 f_zX   (over the free parameters only),
 and d = sqrt(f).  No approximation; tests/test_contact_derivatives.py checks against finite
-differences.
+differences.  A station-triangle pair's are the closed forms of the same (station_triangle_terms:
+(I - n n^T) / d at a vertex, less e e^T / d along an edge, zero over the face), a fifth of the
+arithmetic for the hundreds of such pairs a fine mesh gives.
 
 On the rotation group.  Stations are x_k = x_0 + h sum_{i<k} d3_i, so a frame rotation delta_i
 moves every station beyond segment i: dx_k/d delta_i = -h [d3_i]x for i < k.  With node
@@ -194,16 +196,13 @@ def distance_terms(points, m, c, dc, free, used, r, rz, f_x, f_xx, f_xz):
 
 
 @njit(cache=True)
-def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node, planar):
+def pair_geometry(kind, i, j, nodes, balls, capsules, edges, points, c, dc, free, node):
     """The points, coefficients and free parameters of pair (kind, hose primitive i, obstacle primitive j).
 
     Fills points (4, 3), c (4,), dc (4, 2), free (2,) and node (4,), the station of each point or -1 for
     an obstacle point (the caller's arrays, reused from pair to pair); returns (m, the points used, the
-    radius of the obstacle primitive (mm)); not for STATION_PLANE.  For SEGMENT_SEGMENT, j is the second
-    hose segment; for STATION_TRIANGLE, i is a station and the columns of dc are the closest feature's
-    free directions (triangle_parameters), both of the face's where that feature is one of the bits of
-    `planar` (1 << feature: an edge or vertex inside a flat patch, contact_mesh.MeshArrays.planar; the station
-    is then over the patch, whose distance is the plane's).
+    radius of the obstacle primitive (mm)); for the segment pairs (station_triangle_terms gives STATION_TRIANGLE's,
+    STATION_PLANE's is node_terms' own).  For SEGMENT_SEGMENT, j is the second hose segment.
     """
     for a in range(4):
         c[a] = 0.0
@@ -213,29 +212,6 @@ def pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, 
         for k in range(2):
             dc[a, k] = 0.0
     free[0] = free[1] = False
-    if kind == STATION_TRIANGLE:
-        _set_point(points, 0, point_of(nodes, i))
-        for k in range(3):
-            _set_point(points, k + 1, corner_of(triangles, j, k))
-        u, v, feature = triangle_parameters(point_of(nodes, i), corner_of(triangles, j, 0), corner_of(triangles, j, 1),
-                                            corner_of(triangles, j, 2))
-        node[0] = i
-        c[0], c[1], c[2], c[3] = 1.0, -(1.0 - u - v), -u, -v
-        if (planar >> feature) & 1:
-            feature = FACE
-        if feature == FACE or feature == EDGE_AB:  # d r / d u
-            dc[1, 0], dc[2, 0] = 1.0, -1.0
-            free[0] = True
-        if feature == FACE:  # d r / d v
-            dc[1, 1], dc[3, 1] = 1.0, -1.0
-            free[1] = True
-        elif feature == EDGE_AC:
-            dc[1, 0], dc[3, 0] = 1.0, -1.0
-            free[0] = True
-        elif feature == EDGE_BC:  # along b to c
-            dc[2, 0], dc[3, 0] = 1.0, -1.0
-            free[0] = True
-        return 4, 0.0
     p, q = point_of(nodes, i), point_of(nodes, i + 1)
     _set_point(points, 0, p)
     _set_point(points, 1, q)
@@ -335,13 +311,13 @@ def _pair_distance(kind, i, j, nodes, planes, balls, capsules, triangles, edges)
     if kind == SEGMENT_SEGMENT:
         return _segment_distance(point_of(nodes, i), point_of(nodes, i + 1), point_of(nodes, j),
                                  point_of(nodes, j + 1)), 0.0
-    points, c = np.zeros((4, 3)), np.zeros(4)
-    m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, np.zeros((4, 2)),
-                              np.zeros(2, np.bool_), np.zeros(4, np.int64), 0)  # the free directions unused
-    r = np.zeros(3)
-    for k in range(m):
-        r += c[k] * points[k]
-    return math.sqrt(_dot3(r, r)), radius
+    x = point_of(nodes, i)  # STATION_TRIANGLE: as contact_mesh.mesh_pairs measures it, to the bit
+    a, b, c = corner_of(triangles, j, 0), corner_of(triangles, j, 1), corner_of(triangles, j, 2)
+    u, v, _ = triangle_parameters(x, a, b, c)
+    distance = 0.0
+    for k in range(3):
+        distance += (x[k] - ((1.0 - u - v) * a[k] + u * b[k] + v * c[k])) ** 2
+    return math.sqrt(distance), 0.0
 
 
 @njit(cache=True)
@@ -391,13 +367,51 @@ def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutof
 
 
 @njit(cache=True)
+def station_triangle_terms(x, j, triangles, planar, normal, curvature, nearest):
+    """Distance (mm) of the point x (3,) to triangle j of triangles (F, 3, 3), its gradient (normal (3,)) and Hessian
+    (curvature (3, 3)) in x, and the nearest point (nearest (3,)), written into the caller's arrays.
+
+    The closed forms of what pair_geometry and distance_terms give a STATION_TRIANGLE pair (the same
+    derivatives, a fifth of the arithmetic: a mesh near the hose gives hundreds of such pairs per evaluation):
+    with n the unit vector from the nearest point, (I - n n^T) / d at a vertex, (I - n n^T - e e^T) / d on an
+    edge of unit direction e, zero on the face or a feature inside the flat patch (bit 1 << feature of planar).
+    """
+    a, b, c = corner_of(triangles, j, 0), corner_of(triangles, j, 1), corner_of(triangles, j, 2)
+    u, v, feature = triangle_parameters(x, a, b, c)
+    if (planar >> feature) & 1:
+        feature = FACE
+    for k in range(3):
+        nearest[k] = (1.0 - u - v) * a[k] + u * b[k] + v * c[k]
+        normal[k] = x[k] - nearest[k]
+    d = math.sqrt(_dot3(normal, normal))
+    for k in range(3):
+        normal[k] /= d
+    for k in range(3):
+        for m in range(3):
+            curvature[k, m] = 0.0
+    if feature == FACE:
+        return d
+    if feature == EDGE_AB or feature == EDGE_AC or feature == EDGE_BC:
+        p, q = (a, b) if feature == EDGE_AB else (a, c) if feature == EDGE_AC else (b, c)
+        e = (q[0] - p[0], q[1] - p[1], q[2] - p[2])
+        length = math.sqrt(_dot3(e, e))
+        e = (e[0] / length, e[1] / length, e[2] / length)
+    else:
+        e = (0.0, 0.0, 0.0)
+    for k in range(3):
+        for m in range(3):
+            curvature[k, m] = ((1.0 if k == m else 0.0) - normal[k] * normal[m] - e[k] * e[m]) / d
+    return d
+
+
+@njit(cache=True)
 def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, triangles, edges, planar, kinds, first,
                second):
     """Barrier energy of the given pairs (N*mm), its gradient (N+1, 3) and Hessian (N+1, N+1, 3, 3) in the stations.
 
     weight: kappa h, N/mm (energy per mm^2 of barrier).  triangles (F, 3, 3), edges (E, 2, 3): the
     corners of the mesh primitives (mm) that STATION_TRIANGLE and SEGMENT_EDGE pairs index; planar (F,): each
-    triangle's features inside its flat patch (pair_geometry).  Also per pair: the force on the hose
+    triangle's features inside its flat patch (station_triangle_terms).  Also per pair: the force on the hose
     (N; for a self-contact pair, on the first segment), the closest points on the hose and on the
     other body (mm) and the gap (mm).
     """
@@ -414,6 +428,7 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
     free, node = np.zeros(2, np.bool_), np.zeros(4, np.int64)
     r, rz, d_x, d_xx, f_xz = np.zeros(3), np.zeros((3, 2)), np.zeros(12), np.zeros((12, 12)), np.zeros((12, 2))
     hose_point, axis_point = np.zeros(3), np.zeros(3)  # axis_point: on the other body's axis (or centre, or surface)
+    normal, curvature, nearest = np.zeros(3), np.zeros((3, 3)), np.zeros(3)  # a station-triangle pair's
     for p in range(kinds.shape[0]):
         kind, i, j = kinds[p], first[p], second[p]
         if kind == STATION_PLANE:
@@ -430,9 +445,22 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
             on_other[p] = nodes[i] - (gap + hose_radius) * normal
             gaps[p] = gap
             continue
-        m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, triangles, edges, points, c, dc, free, node,
-                                  planar[j] if kind == STATION_TRIANGLE else 0)
-        on_first = 1 if kind == STATION_TRIANGLE else 2  # the points of the (first) hose primitive
+        if kind == STATION_TRIANGLE:
+            d = station_triangle_terms(point_of(nodes, i), j, triangles, planar[j], normal, curvature, nearest)
+            gap = d - hose_radius
+            b, b1, b2 = barrier(gap, d_hat)
+            energy += weight * b
+            for x in range(3):
+                grad[i, x] += weight * b1 * normal[x]
+                forces[p, x] = -weight * b1 * normal[x]
+                for y in range(3):
+                    hess[i, i, x, y] += weight * (b2 * normal[x] * normal[y] + b1 * curvature[x, y])
+                on_hose[p, x] = nodes[i, x]
+                on_other[p, x] = nearest[x]
+            gaps[p] = gap
+            continue
+        m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, edges, points, c, dc, free, node)
+        on_first = 2  # the points of the (first) hose segment
         used = 4 if kind == SEGMENT_SEGMENT else on_first  # the hose's points: the others are fixed
         d = distance_terms(points, m, c, dc, free, used, r, rz, d_x, d_xx, f_xz)
         other_radius = hose_radius if kind == SEGMENT_SEGMENT else radius
