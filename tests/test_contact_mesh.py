@@ -12,6 +12,7 @@ from hoseline.mechanics.contact import (
     EDGE_BC,
     FACE,
     SEGMENT_EDGE,
+    STATION_PLANE,
     STATION_TRIANGLE,
     VERTEX_A,
     VERTEX_B,
@@ -280,7 +281,6 @@ def test_a_station_over_a_flat_edge_or_vertex_has_the_plane_s_energy_gradient_an
     # edge or vertex; the distance to the floor is the plane's, flat along it: measured as the edge's or vertex's,
     # its Hessian bent the barrier's push about the feature (a negative curvature of push / distance), and a heavy
     # hose on a plate lost its stability where it had none
-    from hoseline.mechanics.contact import STATION_PLANE
 
     mesh = pack_meshes([_grid_floor(4)], [0])  # 200 x 100 mm cells
     plane = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
@@ -722,3 +722,29 @@ def test_the_step_filter_s_kept_station_gaps_are_those_sought_anew():
         bounds = scale * rng.uniform(0.5, 1.5, 31)
         expected = np.where(exact < bounds, exact, np.inf)
         np.testing.assert_array_equal(watch._gaps_below(model, bounds), expected)
+
+
+def test_plane_and_triangle_pairs_in_one_call_are_the_sum_of_each_alone_and_leave_the_obstacles_as_they_were():
+    """Station-plane and station-triangle pairs share node_terms' arrays for a station's direction and curvature: one
+    call with both gives what two calls give, each alone, and leaves the planes and triangles untouched (the plane's
+    row once stood in for that array, and a triangle pair after it overwrote the plane's normal)."""
+    nodes = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.3], [2.0, 0.0, 0.3]])
+    planes = np.array([[0.0, 0.0, -1.0, 0.0, 0.0, 1.0]])
+    triangles = np.array([[[0.0, -5.0, 1.5], [5.0, -5.0, 1.5], [0.0, 5.0, 1.5]]])
+    kept = planes.copy(), triangles.copy()
+
+    def terms(kinds, first):
+        return node_terms(nodes, 1.0, 1.0, 0.5, planes, np.zeros((0, 4)), np.zeros((0, 7)), triangles,
+                          np.zeros((0, 2, 3)), np.zeros(1, np.int64), np.array(kinds), np.array(first),
+                          np.zeros(len(kinds), np.int64))
+
+    both = terms([STATION_PLANE, STATION_TRIANGLE, STATION_PLANE], [1, 2, 2])
+    np.testing.assert_array_equal(planes, kept[0])
+    np.testing.assert_array_equal(triangles, kept[1])
+    alone = [terms([kind], [station]) for kind, station in ((STATION_PLANE, 1), (STATION_TRIANGLE, 2),
+                                                            (STATION_PLANE, 2))]
+    assert both[0] == pytest.approx(sum(part[0] for part in alone), rel=1e-14)
+    for k in (1, 2):  # gradient, Hessian
+        np.testing.assert_allclose(both[k], sum(part[k] for part in alone), rtol=1e-14, atol=0.0)
+    for k in (3, 4, 5, 6):  # forces, points on the hose and on the other body, gaps: one row per pair
+        np.testing.assert_allclose(both[k], np.concatenate([part[k] for part in alone]), rtol=1e-14, atol=0.0)

@@ -367,6 +367,22 @@ def pair_gaps(nodes, hose_radius, planes, balls, capsules, self_exclusion, cutof
 
 
 @njit(cache=True)
+def plane_terms(x, j, planes, normal, curvature, nearest):
+    """Signed distance (mm) of the point x (3,) from plane j of planes (P, 6), its gradient (normal (3,), the plane's
+    unit normal) and Hessian (curvature (3, 3), zero) in x, and the nearest point of the plane (nearest (3,)), written
+    into the caller's arrays as station_triangle_terms does."""
+    d = 0.0
+    for k in range(3):
+        normal[k] = planes[j, 3 + k]
+        d += normal[k] * (x[k] - planes[j, k])
+    for k in range(3):
+        nearest[k] = x[k] - d * normal[k]
+        for m in range(3):
+            curvature[k, m] = 0.0
+    return d
+
+
+@njit(cache=True)
 def station_triangle_terms(x, j, triangles, planar, normal, curvature, nearest):
     """Distance (mm) of the point x (3,) to triangle j of triangles (F, 3, 3), its gradient (normal (3,)) and Hessian
     (curvature (3, 3)) in x, and the nearest point (nearest (3,)), written into the caller's arrays.
@@ -428,25 +444,14 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
     free, node = np.zeros(2, np.bool_), np.zeros(4, np.int64)
     r, rz, d_x, d_xx, f_xz = np.zeros(3), np.zeros((3, 2)), np.zeros(12), np.zeros((12, 12)), np.zeros((12, 2))
     hose_point, axis_point = np.zeros(3), np.zeros(3)  # axis_point: on the other body's axis (or centre, or surface)
-    normal, curvature, nearest = np.zeros(3), np.zeros((3, 3)), np.zeros(3)  # a station-triangle pair's
+    normal, curvature, nearest = np.zeros(3), np.zeros((3, 3)), np.zeros(3)  # a station pair's (plane, triangle)
     for p in range(kinds.shape[0]):
         kind, i, j = kinds[p], first[p], second[p]
-        if kind == STATION_PLANE:
-            normal = planes[j, 3:]
-            gap = _dot3(normal, nodes[i] - planes[j, :3]) - hose_radius
-            b, b1, b2 = barrier(gap, d_hat)
-            energy += weight * b
-            for x in range(3):
-                grad[i, x] += weight * b1 * normal[x]
-                forces[p, x] = -weight * b1 * normal[x]
-                for y in range(3):
-                    hess[i, i, x, y] += weight * b2 * normal[x] * normal[y]
-            on_hose[p] = nodes[i]
-            on_other[p] = nodes[i] - (gap + hose_radius) * normal
-            gaps[p] = gap
-            continue
-        if kind == STATION_TRIANGLE:
-            d = station_triangle_terms(point_of(nodes, i), j, triangles, planar[j], normal, curvature, nearest)
+        if kind == STATION_PLANE or kind == STATION_TRIANGLE:  # a station's distance: its gradient is a unit vector
+            if kind == STATION_PLANE:
+                d = plane_terms(point_of(nodes, i), j, planes, normal, curvature, nearest)
+            else:
+                d = station_triangle_terms(point_of(nodes, i), j, triangles, planar[j], normal, curvature, nearest)
             gap = d - hose_radius
             b, b1, b2 = barrier(gap, d_hat)
             energy += weight * b
