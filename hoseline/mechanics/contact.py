@@ -23,8 +23,8 @@ the envelope theorem and the implicit function theorem give
     f_X = df/dX at z*,   f_XX = d2f/dX2 - f_Xz f_zz^-1 f_zX   (over the free parameters only),
 and d = sqrt(f).  No approximation; tests/test_contact_derivatives.py checks against finite
 differences.  A station-triangle pair's are the closed forms of the same (station_triangle_terms:
-(I - n n^T) / d at a vertex, less e e^T / d along an edge, zero over the face), a fifth of the
-arithmetic for the hundreds of such pairs a fine mesh gives.
+(I - n n^T) / d at a vertex, less e e^T / d along an edge, zero over the face), in a third of the
+time, for the hundreds of such pairs a fine mesh gives.
 
 On the rotation group.  Stations are x_k = x_0 + h sum_{i<k} d3_i, so a frame rotation delta_i
 moves every station beyond segment i: dx_k/d delta_i = -h [d3_i]x for i < k.  With node
@@ -387,8 +387,8 @@ def station_triangle_terms(x, j, triangles, planar, normal, curvature, nearest):
     """Distance (mm) of the point x (3,) to triangle j of triangles (F, 3, 3), its gradient (normal (3,)) and Hessian
     (curvature (3, 3)) in x, and the nearest point (nearest (3,)), written into the caller's arrays.
 
-    The closed forms of what pair_geometry and distance_terms give a STATION_TRIANGLE pair (the same
-    derivatives, a fifth of the arithmetic: a mesh near the hose gives hundreds of such pairs per evaluation):
+    The closed forms of distance_terms' envelope formulas for a point and a triangle (the same derivatives in a
+    third of the time: a mesh near the hose gives hundreds of such pairs per evaluation):
     with n the unit vector from the nearest point, (I - n n^T) / d at a vertex, (I - n n^T - e e^T) / d on an
     edge of unit direction e, zero on the face or a feature inside the flat patch (bit 1 << feature of planar).
     """
