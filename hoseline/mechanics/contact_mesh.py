@@ -123,7 +123,8 @@ class MeshArrays:
     edges, the pieces of one planar face; a station pairs with the nearest triangle of each patch within
     reach (mesh_pairs).  planar (F,): bit 1 << f (contact.EDGE_AB, ..., VERTEX_C) set for each feature f of the
     triangle inside its patch, its flat edges and its vertices on no kept edge: a station whose nearest point of
-    the patch is there is over the patch, and its distance's derivatives are the plane's (contact.pair_geometry).
+    the patch is there is over the patch, and its distance's derivatives are the plane's
+    (contact.station_triangle_terms).
     triangle_tree: (lower (M, 3), upper (M, 3), children (M, 2), ranges (M, 2)) of every mesh's tree,
     node and item indices global.  triangle_roots (K,): the root node of each mesh's tree (-1: the mesh left out
     of the searches, contact_motion.only).
