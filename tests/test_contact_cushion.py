@@ -113,13 +113,63 @@ def test_a_roll_locked_on_the_cushion_is_another_problem(strut_case, without_cus
 
 def test_a_narrowing_that_fails_follows_the_path_again_with_the_model_s_barrier(strut_case, without_cushion,
                                                                                  monkeypatch):
+    # Newton fails every narrowing, and so does the walk downhill (not the widening at a phase's start: its barrier
+    # is the cushion's, wider than any narrowing's)
+    widest = cushion.CUSHION_RADII * strut_case.hose.outer_radius
+    downhill = cushion.minimise_with_contact
+
     def fails(props, clamps, state, model, **options):
         return state, NewtonReport(False, 3, 1.0, -1, "iteration limit reached")
 
+    def fails_narrower(props, clamps, state, model, **options):
+        if model.activation < widest:
+            return fails(props, clamps, state, model)
+        return downhill(props, clamps, state, model, **options)
+
     monkeypatch.setattr(cushion, "solve_with_contact", fails)
+    monkeypatch.setattr(cushion, "minimise_with_contact", fails_narrower)
     again = solve(strut_case, estimate_error=False)
     assert any("did not narrow" in event and "followed again" in event for event in again.events)
     np.testing.assert_allclose(again.centerline, without_cushion.centerline, rtol=0.0, atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def drum_cases():
+    """(the drum of bench/bench_contact_placement.py, its placement with the model's barrier all along): a 335 mm
+    hose between two upright mounts 200 mm apart, draped over a drum of radius 30 mm lying across its plane."""
+    from hoseline.io.problem_file import problem_from_dict
+
+    drum = problem_from_dict({
+        "hose": {"length": 335.0, "outer_diameter": 10.0, "bending_stiffness": 1e5, "segments": 50},
+        "start": {"point": [-100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
+        "end": {"point": [100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
+        "contact": {"obstacles": [{"kind": "cylinder", "start": [0.0, -200.0, 0.0], "end": [0.0, 200.0, 0.0],
+                                   "radius": 30.0, "name": "drum"}]}})
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(cushion, "CUSHION_RADII", 0.0)
+        return drum, solve(drum, estimate_error=False)
+
+
+def test_a_narrowing_newton_fails_settles_downhill_on_the_equilibrium_of_the_model_s_barrier(drum_cases):
+    # the hose rests on the drum's cushion (1 mm) at the end of the place phase; narrowed to 0.1 mm it drops about
+    # half a millimetre, and Newton fails ("no acceptable step found"): the place phase was followed again with the
+    # model's barrier (80 Newton iterations in all, 51 of them again); the walk downhill ends at the same
+    # equilibrium (53 in all)
+    drum, slow = drum_cases
+    result = solve(drum, estimate_error=False)
+    assert not [event for event in result.events if "did not narrow" in event]
+    assert result.stable and result.contacts[0].min_gap >= 0.0
+    np.testing.assert_allclose(result.centerline, slow.centerline, rtol=0.0, atol=1e-9)
+
+
+def test_a_narrowing_that_moves_the_hose_farther_than_the_settling_limit_is_not_kept(drum_cases, monkeypatch):
+    # the same drum with no settling allowed: its narrowing's walk downhill (0.5 mm) is refused and the path is
+    # followed again with the model's barrier, to the same equilibrium
+    drum, slow = drum_cases
+    monkeypatch.setattr(cushion, "SETTLING_DIAMETERS", 0.01)
+    result = solve(drum, estimate_error=False)
+    assert any("did not narrow" in event and "more than 0.01 hose diameter(s)" in event for event in result.events)
+    np.testing.assert_allclose(result.centerline, slow.centerline, rtol=0.0, atol=1e-12)
 
 
 def test_a_planar_loop_closes_on_itself_at_the_same_touch_with_and_without_the_cushion(monkeypatch):

@@ -158,6 +158,13 @@ def polish(props: RodProperties, clamps: Clamps, state: RodState, model: Contact
     return state, report.iterations
 
 
+def largest_movement(props: RodProperties, clamps: Clamps, before: RodState, after: RodState) -> float:
+    """The largest distance (mm) a station moved from `before` to `after`, both held by `clamps`."""
+    h = props.segment_length
+    return float(np.max(np.linalg.norm(centerline(after.frames, clamps.start_point, h)
+                                       - centerline(before.frames, clamps.start_point, h), axis=1)))
+
+
 def model_radius(model: ContactModel | ObstaclePath) -> float:
     """The hose's outer radius (mm) of a contact model, or of the design model of moving obstacles."""
     return model.obstacles.design.hose_radius if isinstance(model, ObstaclePath) else model.hose_radius
@@ -213,9 +220,7 @@ def _snap(phase: str, clamps: Clamps, props: RodProperties, before: RodState, st
             + hardest_push(props, reached[0], before, reached[1]))
     if report.message == NEUTRAL_MODE:  # no snap: the step only looked unstable
         return relaxed, report.iterations
-    h = props.segment_length
-    jump = float(np.max(np.linalg.norm(centerline(relaxed.frames, clamps.start_point, h)
-                                       - centerline(before.frames, clamps.start_point, h), axis=1)))
+    jump = largest_movement(props, clamps, before, relaxed)
     if log is not None:
         log.events.append(f"{phase}: {what}; with contact, the hose snaps downhill to a stable equilibrium at "
                           f"fraction {t_next:.4f}, largest station movement {jump:.3f} mm")
