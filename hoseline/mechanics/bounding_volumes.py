@@ -22,7 +22,10 @@ from hoseline.mechanics.proximity import (
     segment_triangle_distance,
 )
 
-LEAF_SIZE = 4
+LEAF_SIZE = 16  # triangles or edges per leaf: fewer levels for the walks down two trees, more items per leaf to
+# measure (bench/bench_contact_placement.py --mesh: the 100 000-triangle strut 0.66-0.68 s against 0.75-0.76 s with 4,
+# 0.69-0.71 s with 8, 0.67-0.69 s with 32 and 64; a hose pressed on an icosphere of 81 920 triangles 3.1 against
+# 3.7 s; its sweep, the clearance queries of bench/bench_sweep.py and the moving meshes unchanged within noise)
 LEAF_PIECES = 4  # of a segment, for the leaf test of leaves_within (leaf_within)
 STACK_SIZE = 256  # far above the depth of a median-split tree (about log2(items / LEAF_SIZE))
 
