@@ -468,6 +468,43 @@ def test_one_walk_down_both_trees_finds_the_leaves_of_a_walk_per_segment(seed):
     assert len(expected) > 10 and found == expected
 
 
+def test_a_station_pairs_with_the_nearest_triangle_of_each_patch_within_its_cutoff():
+    """Against trimesh's closest points: a fine wavy drum (every triangle its own patch, hundreds within a station's
+    cutoff) and a grid floor (one patch of 800 triangles), each station's pairs are one per patch within the
+    cutoff, at the smallest gap of that patch's triangles."""
+    import trimesh
+
+    drum_vertices, drum_faces = _faceted_drum(96, rows=40, radius=20.0, half_length=20.0)
+    wave = 0.2 * np.sin(drum_vertices[:, 1]) * np.cos(3.0 * np.arctan2(drum_vertices[:, 2], drum_vertices[:, 0]))
+    drum_vertices = drum_vertices * (1.0 + wave / 20.0)[:, None]
+    floor_vertices, floor_faces = _grid_floor(20, size=(60.0, 60.0))
+    floor_vertices = floor_vertices - [0.0, 0.0, 22.0]
+    parts = [(drum_vertices, drum_faces), (floor_vertices, floor_faces)]
+    mesh = pack_meshes(parts, [0, 1])
+    radius, cutoff = 3.0, 1.5
+    angles = np.linspace(0.3, 1.2 * np.pi, 12)
+    nodes = np.column_stack([24.0 * np.cos(angles), np.linspace(-8.0, 8.0, 12), -24.0 * np.sin(angles)])
+    nodes = np.vstack([nodes, [[0.0, 0.0, -18.5], [5.0, 3.0, -18.6]]])  # two stations over the floor (and the drum)
+    kinds, first, second, gaps = mesh.pairs(nodes, radius, cutoff)
+    station_pairs = kinds == STATION_TRIANGLE
+    found = {(int(k), int(mesh.patches[t])): gap for k, t, gap in zip(first[station_pairs], second[station_pairs],
+                                                                       gaps[station_pairs])}
+    expected = {}
+    for vertices, faces in parts:  # the packed triangles, by their corners, with their patches
+        corners = vertices[faces]
+        packed = {tuple(np.round(t.ravel(), 9)): patch for t, patch in zip(mesh.triangles, mesh.patches)}
+        patch_of = np.array([packed[tuple(np.round(c.ravel(), 9))] for c in corners])
+        for k in range(1, len(nodes)):
+            points = trimesh.triangles.closest_point(corners, np.repeat(nodes[k][None], len(corners), axis=0))
+            gap = np.linalg.norm(points - nodes[k], axis=1) - radius
+            for patch in np.unique(patch_of[gap < cutoff]):
+                expected[(k, int(patch))] = float(np.min(gap[patch_of == patch]))
+    assert found.keys() == expected.keys()
+    assert max(abs(found[key] - expected[key]) for key in found) < 1e-9
+    per_station = np.bincount(first[station_pairs])
+    assert per_station.max() > 100 and len(expected) > 500  # many patches per station: the table's probing is met
+
+
 def test_mesh_pairs_come_in_the_order_of_their_stations_and_segments():
     rng = np.random.default_rng(5)
     vertices, faces = _faceted_drum(24, rows=6)

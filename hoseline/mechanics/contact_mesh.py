@@ -419,11 +419,21 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
     """
     kinds, first, second, gaps = [0 for _ in range(0)], [0 for _ in range(0)], [0 for _ in range(0)], [0.0 for _ in range(0)]
     found, leaves = near_stations, station_leaves
-    station, own = -1, 0  # the station whose pairs are being listed, and where they start
+    # the patches of the station's pairs listed so far, by hash (open addressing): a finely meshed curved surface
+    # gives every triangle its own patch, hundreds within a station's cutoff, where a search of the listed pairs
+    # took time as their square (a station's pairs are never more than its leaves' triangles: the table is kept
+    # at most half full)
+    keys = np.full(_table_size(found, leaves, t_ranges), -1, np.int64)
+    listed_at = np.empty(keys.shape[0], np.int64)
+    slots = [0 for _ in range(0)]  # the table's slots in use, to empty at the next station
+    station = -1  # the station whose pairs are being listed
     for pair in range(found.shape[0]):
         k, leaf = found[pair] + 1, leaves[pair]
         if k != station:
-            station, own = k, len(kinds)
+            for slot in slots:
+                keys[slot] = -1
+            slots.clear()
+            station = k
         cutoff = station_cutoffs[k]
         x = point_of(nodes, k)
         for position in range(t_ranges[leaf, 0], t_ranges[leaf, 0] + t_ranges[leaf, 1]):
@@ -436,15 +446,14 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
             if not gap < cutoff:
                 continue
             if not every_feature:
-                same = -1  # this station's pair with the patch, if listed (the last listed first: a leaf's
-                for listed in range(len(kinds) - 1, own - 1, -1):  # triangles are neighbours, often in one patch)
-                    if patches[second[listed]] == patches[position]:
-                        same = listed
-                        break
-                if same >= 0:
+                slot = _slot(keys, patches[position])
+                if keys[slot] >= 0:  # this station's pair with the patch is listed: keep the nearer triangle
+                    same = listed_at[slot]
                     if gap < gaps[same]:
                         second[same], gaps[same] = position, gap
                     continue
+                keys[slot], listed_at[slot] = patches[position], len(kinds)
+                slots.append(slot)
             kinds.append(STATION_TRIANGLE)
             first.append(k)
             second.append(position)
@@ -466,6 +475,32 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
             gaps.append(gap)
     return (np.array(kinds, dtype=np.int64), np.array(first, dtype=np.int64), np.array(second, dtype=np.int64),
             np.array(gaps, dtype=np.float64))
+
+
+@njit(cache=True)
+def _table_size(found, leaves, ranges):
+    """A power of two at least twice the most triangles in one station's leaves (found: the stations, in order)."""
+    most, count = 0, 0
+    for pair in range(found.shape[0]):
+        if pair > 0 and found[pair] != found[pair - 1]:
+            count = 0
+        count += ranges[leaves[pair], 1]
+        most = max(most, count)
+    size = 2
+    while size < 2 * most:
+        size *= 2
+    return size
+
+
+@njit(cache=True, inline="always")
+def _slot(keys, patch):
+    """The slot of `patch` in the table `keys` (open addressing, linear probing): where it is, or the empty one where
+    it would go."""
+    mask = keys.shape[0] - 1
+    slot = (((patch * 2654435761) & 0xFFFFFFFF) * keys.shape[0]) >> 32  # Knuth's multiplicative hash, its high bits
+    while keys[slot] >= 0 and keys[slot] != patch:
+        slot = (slot + 1) & mask
+    return slot
 
 
 @njit(cache=True)
