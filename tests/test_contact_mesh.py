@@ -11,6 +11,7 @@ from hoseline.mechanics.contact import (
     EDGE_AC,
     EDGE_BC,
     FACE,
+    SEGMENT_CAPSULE,
     SEGMENT_EDGE,
     STATION_PLANE,
     STATION_TRIANGLE,
@@ -91,6 +92,34 @@ def test_segment_edge_gradient_and_hessian(case):
         jitter = 0.1 * rng.standard_normal((2, 3))
         nodes = np.array([p, q]) + lift + jitter + offset
         _check_against_finite_differences(nodes, np.zeros((0, 3, 3)), edge[None], SEGMENT_EDGE, 0, 0)
+
+
+def test_segment_edge_terms_are_those_of_a_capsule_of_no_radius_on_the_edge():
+    """The written-out segment-edge terms (contact.segment_edge_terms) against the general envelope formulas of a
+    segment-capsule pair whose capsule is the edge with radius 0, in every region and near parallel."""
+    rng = np.random.default_rng(11)
+    edge = np.array([[0.6, 1.1, -0.3], [5.6, 1.4, -0.1]])
+    capsule = np.concatenate([edge.ravel(), [0.0]])[None]
+    regions = set()
+    for trial in range(400):
+        along = edge[1] - edge[0]
+        p = edge[0] + rng.uniform(-0.4, 1.4) * along + rng.normal(scale=1.5, size=3) + [0.0, 0.0, 2.5]
+        q = p + (rng.uniform(0.5, 1.5) * along / 5.0 + 0.02 * rng.standard_normal(3) if trial % 4 == 0  # near parallel
+                 else rng.normal(scale=2.0, size=3))
+        nodes = np.array([p, q])
+        pair = np.zeros(1, np.int64), np.zeros(1, np.int64)
+        as_edge = node_terms(nodes, RADIUS, WEIGHT, 20.0, NO_PLANES, NO_BALLS, NO_CAPSULES, np.zeros((0, 3, 3)),
+                             edge[None], np.zeros(0, np.int64), np.array([SEGMENT_EDGE]), *pair)
+        as_capsule = node_terms(nodes, RADIUS, WEIGHT, 20.0, NO_PLANES, NO_BALLS, capsule, np.zeros((0, 3, 3)),
+                                np.zeros((0, 2, 3)), np.zeros(0, np.int64), np.array([SEGMENT_CAPSULE]), *pair)
+        if not 0.0 < as_edge[6][0] < 20.0:  # within the barrier's reach
+            continue
+        for mine, general in zip(as_edge, as_capsule):
+            np.testing.assert_allclose(mine, general, rtol=1e-9, atol=1e-9 * np.max(np.abs(general)))
+        s = np.dot(as_edge[4][0] - p, q - p) / np.dot(q - p, q - p)
+        t = np.dot(as_edge[5][0] - edge[0], along) / np.dot(along, along)
+        regions.add((bool(1e-9 < s < 1.0 - 1e-9), bool(1e-9 < t < 1.0 - 1e-9)))
+    assert regions == {(True, True), (True, False), (False, True), (False, False)}
 
 
 def test_flat_edges_are_left_out_and_ridges_kept():

@@ -196,13 +196,14 @@ def distance_terms(points, m, c, dc, free, used, r, rz, f_x, f_xx, f_xz):
 
 
 @njit(cache=True)
-def pair_geometry(kind, i, j, nodes, balls, capsules, edges, points, c, dc, free, node):
+def pair_geometry(kind, i, j, nodes, balls, capsules, points, c, dc, free, node):
     """The points, coefficients and free parameters of pair (kind, hose primitive i, obstacle primitive j).
 
     Fills points (4, 3), c (4,), dc (4, 2), free (2,) and node (4,), the station of each point or -1 for
     an obstacle point (the caller's arrays, reused from pair to pair); returns (m, the points used, the
-    radius of the obstacle primitive (mm)); for the segment pairs (station_triangle_terms gives STATION_TRIANGLE's,
-    STATION_PLANE's is node_terms' own).  For SEGMENT_SEGMENT, j is the second hose segment.
+    radius of the obstacle primitive (mm)); for the segment pairs but SEGMENT_EDGE (segment_edge_terms; and
+    station_triangle_terms gives STATION_TRIANGLE's, STATION_PLANE's is node_terms' own).  For SEGMENT_SEGMENT, j
+    is the second hose segment.
     """
     for a in range(4):
         c[a] = 0.0
@@ -228,9 +229,6 @@ def pair_geometry(kind, i, j, nodes, balls, capsules, edges, points, c, dc, free
     if kind == SEGMENT_CAPSULE:
         a, b = point_of(capsules, j), (capsules[j, 3], capsules[j, 4], capsules[j, 5])
         radius = capsules[j, 6]
-    elif kind == SEGMENT_EDGE:
-        a, b = corner_of(edges, j, 0), corner_of(edges, j, 1)
-        radius = 0.0
     else:
         a, b = point_of(nodes, j), point_of(nodes, j + 1)
         node[2], node[3] = j, j + 1
@@ -421,6 +419,54 @@ def station_triangle_terms(x, j, triangles, planar, normal, curvature, nearest):
 
 
 @njit(cache=True)
+def segment_edge_terms(p, q, a, b, d_x, d_xx):
+    """Distance (mm) of the hose segment pq to the fixed segment ab (a mesh edge), its gradient (d_x[:6]) and Hessian
+    (d_xx[:6, :6]) in (p, q), written into the caller's arrays, and the parameters (s, t) of the closest points
+    p + s (q - p), a + t (b - a).
+
+    distance_terms' envelope formulas for this pair, written out (a fine curved mesh gives thousands of such pairs
+    per evaluation): with w = the closest points' difference, c = (1 - s, s), e1 = q - p, e2 = b - a and the
+    parameters strictly inside [0, 1] free, the gradient is (c0 n, c1 n) with n = w / d, and the Hessian
+    ((c c^T) x I - G A^-1 G^T) / d - d_x d_x^T / d, with G's columns (-w + c0 e1, w + c1 e1) for s and
+    (-c0 e2, -c1 e2) for t, and A = [[e1.e1, -e1.e2], [-e1.e2, e2.e2]] over the free ones.
+    """
+    d, s, t = segment_closest(p, q, a, b)
+    c = (1.0 - s, s)
+    e1 = (q[0] - p[0], q[1] - p[1], q[2] - p[2])
+    e2 = (b[0] - a[0], b[1] - a[1], b[2] - a[2])
+    w = (p[0] + s * e1[0] - a[0] - t * e2[0], p[1] + s * e1[1] - a[1] - t * e2[1],
+         p[2] + s * e1[2] - a[2] - t * e2[2])
+    for j in range(2):
+        for x in range(3):
+            d_x[3 * j + x] = c[j] * w[x] / d
+    for j in range(2):
+        for x in range(3):
+            for l in range(2):
+                for y in range(3):
+                    d_xx[3 * j + x, 3 * l + y] = (c[j] * c[l] if x == y else 0.0) - d_x[3 * j + x] * d_x[3 * l + y]
+    free_s, free_t = 0.0 < s < 1.0, 0.0 < t < 1.0
+    if free_s or free_t:  # less G A^-1 G^T, G's entries formed where used (an array per pair costs more)
+        a_ss, a_st, a_tt = _dot3(e1, e1), -_dot3(e1, e2), _dot3(e2, e2)
+        det = a_ss * a_tt - a_st * a_st
+        for j in range(2):
+            sign_j = -1.0 if j == 0 else 1.0
+            for x in range(3):
+                g_s, g_t = sign_j * w[x] + c[j] * e1[x], -c[j] * e2[x]
+                if free_s and free_t:  # (G A^-1) of this row
+                    k_s, k_t = (g_s * a_tt - g_t * a_st) / det, (g_t * a_ss - g_s * a_st) / det
+                else:
+                    k_s, k_t = (g_s / a_ss, 0.0) if free_s else (0.0, g_t / a_tt)
+                for l in range(2):
+                    sign_l = -1.0 if l == 0 else 1.0
+                    for y in range(3):
+                        d_xx[3 * j + x, 3 * l + y] -= k_s * (sign_l * w[y] + c[l] * e1[y]) - k_t * c[l] * e2[y]
+    for u in range(6):
+        for v in range(6):
+            d_xx[u, v] /= d
+    return d, s, t
+
+
+@njit(cache=True)
 def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, triangles, edges, planar, kinds, first,
                second):
     """Barrier energy of the given pairs (N*mm), its gradient (N+1, 3) and Hessian (N+1, N+1, 3, 3) in the stations.
@@ -464,11 +510,28 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
                 on_other[p, x] = nearest[x]
             gaps[p] = gap
             continue
-        m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, edges, points, c, dc, free, node)
         on_first = 2  # the points of the (first) hose segment
-        used = 4 if kind == SEGMENT_SEGMENT else on_first  # the hose's points: the others are fixed
-        d = distance_terms(points, m, c, dc, free, used, r, rz, d_x, d_xx, f_xz)
-        other_radius = hose_radius if kind == SEGMENT_SEGMENT else radius
+        if kind == SEGMENT_EDGE:
+            p_, q_, a_, b_ = point_of(nodes, i), point_of(nodes, i + 1), corner_of(edges, j, 0), corner_of(edges, j, 1)
+            d, s, t = segment_edge_terms(p_, q_, a_, b_, d_x, d_xx)
+            node[0], node[1] = i, i + 1
+            used, other_radius = on_first, 0.0
+            for x in range(3):
+                hose_point[x] = p_[x] + s * (q_[x] - p_[x])
+                axis_point[x] = a_[x] + t * (b_[x] - a_[x])
+        else:
+            m, radius = pair_geometry(kind, i, j, nodes, balls, capsules, points, c, dc, free, node)
+            used = 4 if kind == SEGMENT_SEGMENT else on_first  # the hose's points: the others are fixed
+            d = distance_terms(points, m, c, dc, free, used, r, rz, d_x, d_xx, f_xz)
+            other_radius = hose_radius if kind == SEGMENT_SEGMENT else radius
+            hose_point[:] = 0.0
+            axis_point[:] = 0.0
+            for a in range(m):
+                for x in range(3):
+                    if a < on_first:
+                        hose_point[x] += c[a] * points[a, x]
+                    else:
+                        axis_point[x] -= c[a] * points[a, x]
         gap = d - hose_radius - other_radius
         b, b1, b2 = barrier(gap, d_hat)
         energy += weight * b
@@ -485,14 +548,6 @@ def node_terms(nodes, hose_radius, weight, d_hat, planes, balls, capsules, trian
                         hess[ka, kb, x, y] += weight * (
                             b2 * d_x[3 * a + x] * d_x[3 * bb + y] + b1 * d_xx[3 * a + x, 3 * bb + y]
                         )
-        hose_point[:] = 0.0
-        axis_point[:] = 0.0
-        for a in range(m):
-            for x in range(3):
-                if a < on_first:
-                    hose_point[x] += c[a] * points[a, x]
-                else:
-                    axis_point[x] -= c[a] * points[a, x]
         for x in range(3):
             on_hose[p, x] = hose_point[x]
             on_other[p, x] = axis_point[x] + other_radius / d * (hose_point[x] - axis_point[x])
