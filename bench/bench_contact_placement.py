@@ -22,13 +22,14 @@ import time
 from dataclasses import replace
 
 import numpy as np
+import trimesh
 
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.mechanics.contact_mesh import _packed_meshes
 from hoseline.model.clips import Clip
 from hoseline.model.motion import Translation, generated_motion
-from hoseline.model.obstacles import Cylinder, Mesh
+from hoseline.model.obstacles import Cylinder, Mesh, Sphere
 from hoseline.model.sweep import SweepProblem
 from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.sweep.quasi_static import run_sweep
@@ -44,6 +45,8 @@ LOOP = {"hose": {"length": 1000.0, "outer_diameter": 10.0, "bending_stiffness": 
 
 # --sweep: the end fitting moved 10 mm down in 200 poses (0.05 mm a pose), the hose held by its clip and the strut
 SWEEP_MOTION = Translation(np.array([0.0, 0.0, -1.0]), (0.0, 10.0), steps=199, name="drop")
+
+BALL_RADIUS = 20.0  # mm, of --sphere's ball
 
 PLECTONEME = {"hose": {"length": 200.0, "outer_diameter": 4.0, "bending_stiffness": 1e5, "torsional_stiffness": 8e4,
                        "segments": 40},
@@ -87,8 +90,15 @@ def mesh_case() -> None:
     round_strut = replace(touching, contact=(Cylinder(centre - 100.0 * axis, centre + 100.0 * axis, radius, "strut"),))
     print(f"thesis hose, 100 segments, 180 deg, fixed clip at station 50; strut of {obstacle.faces.shape[0]} triangles; "
           f"load average {os.getloadavg()[0]:.1f}")
-    for label, problem in (("clip, no contact", clipped), ("clip, cylinder, self-contact", round_strut),
-                           ("clip, mesh strut, self-contact", touching)):
+    cases = [("clip, no contact", clipped), ("clip, cylinder, self-contact", round_strut),
+             ("clip, mesh strut, self-contact", touching)]
+    if "--sphere" in sys.argv:  # a ball of radius 20 mm in the strut's place, 1 mm into the free shape, and meshed finely
+        ball_centre = placed.centerline[25] + side * (plain.hose.outer_radius + BALL_RADIUS - 1.0)
+        ball = trimesh.creation.icosphere(subdivisions=6, radius=BALL_RADIUS)  # 81 920 triangles
+        cases += [("clip, sphere, self-contact", replace(touching, contact=(Sphere(ball_centre, BALL_RADIUS, "ball"),))),
+                  (f"clip, icosphere ({ball.faces.shape[0]}), self-c.",
+                   replace(touching, contact=(Mesh(ball.vertices + ball_centre, ball.faces, "ball"),)))]
+    for label, problem in cases:
         started = time.perf_counter()  # the first in this process: the contact kernels loaded from Numba's cache
         result = solve(problem, estimate_error=False)
         first = time.perf_counter() - started

@@ -476,6 +476,24 @@ def test_pairs_found_through_the_tree_are_those_of_all_triangles():
 
 
 
+@pytest.mark.parametrize("rows", [4, 60])  # 192 triangles: walked in one call; 2880: through leaf lists
+def test_a_hose_cutting_into_a_mesh_gets_one_pair_inside_and_a_clear_hose_all_of_its_pairs(rows):
+    """stop_inside (the contact Newton's evaluations): a hose cutting into a mesh gets the first pair found at a gap of
+    zero or less alone, one of the pairs of every feature; a clear hose the same pairs as without it, to the bit."""
+    mesh = pack_meshes([_faceted_drum(24, rows=rows)], [0])
+    xs = np.arange(-60.0, 61.0, 1.0)
+    through = np.column_stack([xs, np.full_like(xs, 3.0), np.full_like(xs, 30.0)])  # crosses the drum's wall twice
+    over = through + [0.0, 0.0, 13.0]  # 1.3 mm over the top facets
+    stopped = mesh.pairs(through, 2.0, 6.0, stop_inside=True)
+    every = mesh.pairs(through, 2.0, 6.0, every_feature=True)
+    assert np.min(every[3]) <= 0.0 and every[0].size > 100
+    assert stopped[0].size == 1 and stopped[3][0] <= 0.0
+    assert (stopped[0][0], stopped[1][0], stopped[2][0], stopped[3][0]) in set(zip(*[a.tolist() for a in every]))
+    listed, clear = mesh.pairs(over, 2.0, 6.0), mesh.pairs(over, 2.0, 6.0, stop_inside=True)
+    assert np.min(listed[3]) > 0.0 and listed[0].size > 20
+    assert all(np.array_equal(a, b) for a, b in zip(listed, clear))
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_one_walk_down_both_trees_finds_the_leaves_of_a_walk_per_segment(seed):
     from hoseline.mechanics.bounding_volumes import LEAF_SIZE, build_tree, chain_tree, leaf_within, leaves_within

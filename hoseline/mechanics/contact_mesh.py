@@ -167,24 +167,29 @@ class MeshArrays:
         mesh = self.triangle_mesh[second] if kind == STATION_TRIANGLE else self.edge_mesh[second]
         return int(self.owners[mesh])
 
-    def pairs(self, nodes: np.ndarray, hose_radius: float, cutoffs, *, every_feature: bool = False):
+    def pairs(self, nodes: np.ndarray, hose_radius: float, cutoffs, *, every_feature: bool = False,
+              stop_inside: bool = False):
         """(kinds, first, second, gaps) of the station-triangle and segment-edge pairs with a gap below the cutoff mm
         of their station or segment: cutoffs, one for all, or (station cutoffs (N+1,), segment cutoffs (N,)).
         every_feature: also the pairs at features a neighbour covers (flat edges, straight edge ends), as the
-        step filter must watch: a step can carry the hose to where they are the nearest."""
+        step filter must watch: a step can carry the hose to where they are the nearest.
+        stop_inside: where a pair is at a gap of zero or less (the hose inside the mesh: the barrier's energy is
+        infinite, and a line search's trial there is refused whatever the other pairs), that pair alone, found first
+        (a trial that cut into the icosphere of bench/bench_contact_placement.py --mesh --sphere listed up to 60 000
+        pairs, and such trials took half its placement's time)."""
         if np.isscalar(cutoffs):
             cutoffs = (np.full(nodes.shape[0], float(cutoffs)), np.full(nodes.shape[0] - 1, float(cutoffs)))
         station_cutoffs, segment_cutoffs = cutoffs
         if self.triangles.shape[0] < LISTED_TRIANGLES:  # a walk down a small tree costs less than keeping a list
             return walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles,
                                      self.patches, *self.triangle_tree, self.triangle_roots, self.edges, self.corners,
-                                     self.joints, *self.edge_tree, self.edge_roots, every_feature)
+                                     self.joints, *self.edge_tree, self.edge_roots, every_feature, stop_inside)
         stations = nodes[1:]
         near_stations = self._leaves("stations", stations, stations, station_cutoffs[1:] + hose_radius, hose_radius)
         near_segments = self._leaves("segments", nodes[:-1], nodes[1:], segment_cutoffs + hose_radius, hose_radius)
         return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, self.triangles, self.patches,
                           self.triangle_tree[3], *near_stations, self.edges, self.corners, self.joints,
-                          self.edge_tree[3], *near_segments, every_feature)
+                          self.edge_tree[3], *near_segments, every_feature, stop_inside)
 
     def segment_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float,
                      bound: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -407,7 +412,8 @@ def _forest(item_corners: list[np.ndarray]) -> tuple[np.ndarray, tuple, np.ndarr
 
 @njit(cache=True)
 def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, patches, t_ranges, near_stations,
-               station_leaves, edges, corners, joints, e_ranges, near_segments, segment_leaves, every_feature):
+               station_leaves, edges, corners, joints, e_ranges, near_segments, segment_leaves, every_feature,
+               stop_inside):
     """Station-triangle and segment-edge pairs with a gap (mm) below the cutoff (mm) of their station or segment.
 
     nodes (N+1, 3) mm (station 0 is held: not paired); station_cutoffs (N+1,), segment_cutoffs (N,) mm.
@@ -415,6 +421,7 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
     met of equally near ones), or with every triangle within its cutoff if every_feature.
     near_stations, station_leaves: the triangle tree's leaves within reach of stations 1..N (indexed from 0;
     _leaves_in_order, through leaf_lists.LeafLists); near_segments, segment_leaves: the edge tree's of each segment.
+    stop_inside: return the first pair found at a gap of zero or less alone (see MeshArrays.pairs).
     Returns (kinds, first (station or segment), second (triangle or edge), gaps) as contact.pair_gaps.
     """
     kinds, first, second, gaps = [0 for _ in range(0)], [0 for _ in range(0)], [0 for _ in range(0)], [0.0 for _ in range(0)]
@@ -445,6 +452,8 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
             gap = np.sqrt(distance) - hose_radius
             if not gap < cutoff:
                 continue
+            if stop_inside and gap <= 0.0:
+                return _one_pair(STATION_TRIANGLE, k, position, gap)
             if not every_feature:
                 slot = _slot(keys, patches[position])
                 if keys[slot] >= 0:  # this station's pair with the patch is listed: keep the nearer triangle
@@ -469,12 +478,21 @@ def mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, 
                 continue
             if not every_feature and not _edge_takes(p, q, corners[position], joints[position]):
                 continue  # beyond a straight joint, where the edge that continues this one takes the segment
+            if stop_inside and gap <= 0.0:
+                return _one_pair(SEGMENT_EDGE, i, position, gap)
             kinds.append(SEGMENT_EDGE)
             first.append(i)
             second.append(position)
             gaps.append(gap)
     return (np.array(kinds, dtype=np.int64), np.array(first, dtype=np.int64), np.array(second, dtype=np.int64),
             np.array(gaps, dtype=np.float64))
+
+
+@njit(cache=True)
+def _one_pair(kind, first, second, gap):
+    """(kinds, first, second, gaps) of one pair, as mesh_pairs returns them."""
+    return (np.full(1, kind, np.int64), np.full(1, first, np.int64), np.full(1, second, np.int64),
+            np.full(1, gap, np.float64))
 
 
 @njit(cache=True)
@@ -506,7 +524,7 @@ def _slot(keys, patch):
 @njit(cache=True)
 def walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, patches, t_lower, t_upper,
                       t_children, t_ranges, t_roots, edges, corners, joints, e_lower, e_upper, e_children, e_ranges,
-                      e_roots, every_feature):
+                      e_roots, every_feature, stop_inside):
     """mesh_pairs with the leaves found by one walk down each tree (the triangles': t_*, the edges': e_*), in one
     call: for a small mesh, whose walks cost less than the calls around a leaf list."""
     stations = nodes[1:]
@@ -516,7 +534,7 @@ def walked_mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, tria
                                      e_children, e_ranges, e_roots)
     return mesh_pairs(nodes, hose_radius, station_cutoffs, segment_cutoffs, triangles, patches, t_ranges,
                       near_stations[0], near_stations[1], edges, corners, joints, e_ranges, near_segments[0],
-                      near_segments[1], every_feature)
+                      near_segments[1], every_feature, stop_inside)
 
 
 @njit(cache=True)

@@ -87,14 +87,15 @@ class ContactModel:
     names: tuple[str, ...] = ()
     self_exclusion: int = -1
 
-    def pairs(self, nodes: np.ndarray, cutoff: float, *, meshes: bool = True):
+    def pairs(self, nodes: np.ndarray, cutoff: float, *, meshes: bool = True, stop_inside: bool = False):
         """(kinds, first, second, gaps) of every pair with a gap below `cutoff` mm (contact.pair_gaps); the mesh pairs
         (contact_mesh.mesh_pairs) only below the smaller of `cutoff` and d_hat (the barrier's: a mesh has too many
-        to list them all), none without `meshes`."""
+        to list them all), none without `meshes`.  stop_inside: of a mesh the hose is inside, only the first pair
+        found inside (MeshArrays.pairs)."""
         found = pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, self.self_exclusion, cutoff)
         if not meshes or self.mesh.count == 0:
             return found
-        on_meshes = self.mesh.pairs(nodes, self.hose_radius, min(cutoff, self.activation))
+        on_meshes = self.mesh.pairs(nodes, self.hose_radius, min(cutoff, self.activation), stop_inside=stop_inside)
         return tuple(np.concatenate([a, b]) for a, b in zip(found, on_meshes))
 
     def terms(self, nodes: np.ndarray, weight: float, kinds, first, second):
@@ -247,7 +248,7 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
     base = evaluate(props, clamps, state)
     h = props.segment_length
     nodes = centerline(state.frames, clamps.start_point, h)
-    kinds, first, second, _ = model.pairs(nodes, model.activation)
+    kinds, first, second, _ = model.pairs(nodes, model.activation, stop_inside=True)  # inside: the energy is inf
     weight = model.stiffness * h
     energy, node_grad, node_hess, forces, on_hose, on_other, gaps = model.terms(nodes, weight, kinds, first, second)
     grad = base.grad.copy()
