@@ -35,9 +35,9 @@ from numba import njit
 
 from hoseline.mechanics.bounding_volumes import refit_boxes
 from hoseline.mechanics.contact_mesh import MeshArrays
-from hoseline.mechanics.contact_newton import ContactModel, motion_filter
+from hoseline.mechanics.contact_newton import ContactModel, hose_move_clear
 from hoseline.mechanics.newton import RodProperties
-from hoseline.mechanics.rod import Clamps, RodState, centerline
+from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.model.motion import Pose
 
 
@@ -139,19 +139,10 @@ def move_is_clear(props: RodProperties, before: tuple[Clamps, RodState], after: 
     """Whether the hose can go from `before` to `after` (each a state under its clamps; only the start point
     counts) while the obstacles of `model`, where they are before, are carried rigidly by `carry` (None: they
     stay), without crossing any of them (see the module doc).  `before` must not penetrate them."""
-    h = props.segment_length
     (clamps_before, state_before), (clamps_after, state_after) = before, after
     start, frames = np.asarray(clamps_after.start_point, dtype=float), state_after.frames
     if carry is not None:  # the move as the obstacles see it: the hose carried back by their motion
         back = carry.inverse()
         start, frames = carried(start, back), turned(frames, back)
-    tangents_before, tangents_after = state_before.frames[:, 2], frames[:, 2]
-    a, b = tangents_before, tangents_after  # their cross product written out: np.cross costs more than the rest
-    sines = np.sqrt((a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]) ** 2 + (a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]) ** 2
-                    + (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) ** 2)
-    turns = np.arctan2(sines, np.einsum("ij,ij->i", a, b))
-    start_move = float(np.linalg.norm(start - clamps_before.start_point))
-    if start_move == 0.0 and not np.any(turns):
-        return True
-    watch = motion_filter(centerline(state_before.frames, clamps_before.start_point, h), turns, start_move, h, model)
-    return watch.limit >= 1.0 and watch.admits_centerline(centerline(frames, start, h), model, 1.0)
+    return hose_move_clear(np.asarray(clamps_before.start_point, dtype=float), state_before.frames, start, frames,
+                           props.segment_length, model)

@@ -58,6 +58,8 @@ from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.mechanics.step_pairs import pairs_clear, watched_pairs
 
 SAFE_FRACTION = 0.1  # a step may shrink no gap below this fraction of its value
+RESTORED_OFF = 1e-9  # relative to the hose length: the farthest a restored trial may stay off its constraints
+RESTORED_FALL = 1e-12  # relative: how much lower a restored trial's energy must be than the state's (rounding)
 STALLED_STEP = 1.0 / 64.0  # of a Newton step: a step cut below it makes no headway (solve_with_contact's stall)
 SWEPT_EVALUATIONS = 256  # distances per segment-edge pair in the swept check of a step (contact_mesh.swept_edges_clear)
 
@@ -473,6 +475,10 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
             if falls and (filter_first or watch.admits(props, clamps, trial, model, alpha)):
                 accepted = trial, trial_system
                 break
+            if not falls and unstable == 0 and _rod_alone(system) and _rod_alone(trial_system):
+                accepted = _restored(props, clamps, state, system, trial, model)  # see the module doc
+                if accepted is not None:
+                    break
             alpha *= 0.5
         if accepted is None:
             return state, NewtonReport(False, iteration + 1, system.residual, unstable, "no acceptable step found")
@@ -481,6 +487,48 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
         if stall and stalled >= stall:
             return state, NewtonReport(False, iteration + 1, system.residual, unstable, "stalled")
     return state, NewtonReport(False, max_iterations, system.residual, -1, "iteration limit reached")
+
+
+def _rod_alone(system: ContactSystem) -> bool:
+    """Whether nothing is within the barrier's reach at the system's state (its energy finite: the rod's alone)."""
+    return system.pairs[0].size == 0 and math.isfinite(system.energy)
+
+
+def _restored(props: RodProperties, clamps: Clamps, state: RodState, system: ContactSystem, trial: RodState,
+              model: ContactModel) -> tuple[RodState, ContactSystem] | None:
+    """(the trial moved back onto the constraints, its system) where that is a step to take, else None (see the
+    module doc, Restoring steps).  The trial, a Newton step from `state` (whose `system` has nothing within the
+    barrier's reach and a stable KKT inertia), did not lower the residual."""
+    if not clamps.end_clamped:  # a free tip: no constraint to restore
+        return None
+    restored = _onto_constraints(props, clamps, trial)
+    restored_system = evaluate_contact(props, clamps, restored, model)
+    on_constraints = system.energy - float(_multipliers(clamps, state) @ system.constraint)  # to first order
+    if (not _rod_alone(restored_system)
+            or np.max(np.abs(restored_system.constraint)) > RESTORED_OFF * props.length
+            or not restored_system.energy < on_constraints - RESTORED_FALL * abs(on_constraints)):
+        return None
+    h = props.segment_length
+    if not hose_move_clear(clamps.start_point, state.frames, clamps.start_point, restored.frames, h, model):
+        return None
+    return restored, restored_system
+
+
+def hose_move_clear(start_before: np.ndarray, frames_before: np.ndarray, start_after: np.ndarray,
+                    frames_after: np.ndarray, h: float, model: ContactModel) -> bool:
+    """Whether the hose can go from one configuration to another (start point (3,) mm and frames (N, 3, 3) each;
+    h: segment length, mm) without crossing any obstacle of `model` or itself: the virtual path of
+    contact_motion.py's move check (the start point on a straight line, each tangent on a great circle), judged by
+    the step filter (motion_filter).  The configuration before must not penetrate."""
+    a, b = frames_before[:, 2], frames_after[:, 2]  # the tangents' cross product written out: np.cross costs more
+    sines = np.sqrt((a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]) ** 2 + (a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]) ** 2
+                    + (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) ** 2)
+    turns = np.arctan2(sines, np.einsum("ij,ij->i", a, b))
+    start_move = float(np.linalg.norm(start_after - start_before))
+    if start_move == 0.0 and not np.any(turns):
+        return True
+    watch = motion_filter(centerline(frames_before, start_before, h), turns, start_move, h, model)
+    return watch.limit >= 1.0 and watch.admits_centerline(centerline(frames_after, start_after, h), model, 1.0)
 
 
 def minimise_with_contact(
