@@ -17,6 +17,23 @@ closed stays above a tenth of its value: a primitive cannot cross a body without
 it or passing through it, so no accepted step crosses into penetration.  Then the step is
 halved until the residual falls (the tracking Newton of newton.py).
 
+Restoring steps.  The constraint rows are linear: a step that turns a long stretch of hose by an
+angle theta (on the issue's strut, the half beyond the clip rolling about the line from the clip to
+the end, 0.46 rad in one step) leaves the end or a clip off its point by about its length times
+theta^2 / 2 (6.5 mm there), and the residual of that trial rises however far its energy fell: the
+line search cut those steps to 1/16 and 1/32 for twenty iterations in a row (the Maratos effect).
+Where the residual does not fall, the trial is moved back onto the constraints (least-norm
+Gauss-Newton steps, _onto_constraints: a second-order correction) and taken if the state's KKT
+inertia is stable (the step goes downhill on the constraints' tangent space), nothing is within the
+barrier's reach at the state, the trial and the restored trial (the rod alone; near an obstacle the
+residual decides, and a fold beyond which the hose slides off is met by the path as before), the
+restored trial is on the constraints to RESTORED_OFF of the length with an energy below the state's
+Lagrangian E - lambda.c (its energy on the constraints, to first order), and the move there passes
+the move check of moving obstacles (hose_move_clear).  It is a longer step along Newton's own
+direction from a stable state, toward the minimum the shorter steps would reach: the issue's strut
+took 546 Newton iterations instead of 579, the loop of bench/bench_contact_placement.py 318
+instead of 409, to the same equilibria (1e-11 mm; tests/test_contact_restoring.py).
+
 Downhill mode (minimise_with_contact): the shifted Newton of newton._minimise_kernel with the same
 step filter, judged by the total energy with the barrier (see its docstring); used after folds.
 """
