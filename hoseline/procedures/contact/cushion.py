@@ -14,10 +14,12 @@ and slides on it in long steps (the same strut: 569 and 726 iterations in all). 
 the cushion is narrowed NARROWING-fold at a time to the model's own d_hat, each a Newton solve
 from the last state under the path's final clamps (6 to 9 iterations each on the strut), and the
 end is polished as follow_contact's.  Where Newton fails a narrowing (the hose drops by about the
-cushion's depth onto what it rests on: the drum of bench/bench_contact_placement.py, the
-plectoneme's passes), the hose settles there by a walk downhill (minimise_with_contact), kept if no
-station moves more than SETTLING_DIAMETERS hose diameters (the drum's moved 0.5 and 0.05 mm, the
-same equilibrium as the slow path below to 5e-13 mm, in 53 Newton iterations instead of 80).  So
+cushion's depth onto what it rests on: the plectoneme's passes of bench/bench_contact_placement.py,
+and its drum before Newton's restoring steps carried it through), the hose settles there by a walk
+downhill (minimise_with_contact), kept if no station moves more than SETTLING_DIAMETERS hose
+diameters (the drum's moved 0.5 and 0.05 mm, the same equilibrium as the slow path below to 5e-13 mm,
+in 53 Newton iterations instead of 80; tests/test_contact_cushion.py takes the restoring steps away
+to reach it).  So
 the result is an equilibrium with the model's barrier, and on the issue's case the one the path
 with the model's barrier all along ends at (the same to 5e-13 mm with the cylinder,
 tests/test_contact_cushion.py, and 2e-9 mm with the mesh).  Each
@@ -50,7 +52,8 @@ CUSHION_RADII = 0.2  # the barrier distance along a placement path, in hose radi
 # issue's case 0.06 r took 1.2 and 4.2 s, 0.5 r 0.87 and 4.6 s, 0.2 r 0.78 and 4.5 s: cylinder and mesh, one run each)
 NARROWING = 10.0  # the cushion is narrowed by this factor at a time at the end of a path
 WIDENING_ITERATIONS = 200  # of the downhill walks onto the cushion at a path's start (the strut: 12) and
-# off it where a narrowing's Newton fails (the drum of bench/bench_contact_placement.py: 7 and 6, the plectoneme 18)
+# off it where a narrowing's Newton fails (the plectoneme of bench/bench_contact_placement.py: 18 and 10; its drum
+# without Newton's restoring steps: 7 and 6)
 SETTLING_DIAMETERS = 1.0  # the farthest a narrowing's walk downhill may move a station, in hose diameters (the drum:
 # 0.05, the plectoneme 0.35): the cushion holds the hose off by a fifth of its radius
 
