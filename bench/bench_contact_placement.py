@@ -12,10 +12,13 @@ contact, and with the strut as an analytic cylinder; with --sweep also each one'
 fitting moved 10 mm down (poses per second of the solver, median of 3 sweeps).  --mesh placements: median of 3
 solves after a first one (whose time, the kernels loaded from Numba's cache and the mesh packed included, is shown
 apart; later solves take the packing kept for the same mesh, contact_mesh.pack_meshes), and the median time of
-packing the mesh afresh.  Run:
-python bench/bench_contact_placement.py [--loop] [--plectoneme] [--mesh [--sweep]]
+packing the mesh afresh.  --breakdown: each placement with contact once more, timed by part
+(contact_breakdown.py: the path's converged and failed steps, walks downhill, narrowings; the mesh searches, and
+what the placement would take were they free).  Run:
+python bench/bench_contact_placement.py [--loop] [--plectoneme] [--mesh [--sweep] [--sphere] [--breakdown]]
 """
 
+import math
 import os
 import sys
 import time
@@ -24,6 +27,7 @@ from dataclasses import replace
 import numpy as np
 import trimesh
 
+from contact_breakdown import breakdown
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.mechanics.contact_mesh import _packed_meshes
@@ -98,6 +102,7 @@ def mesh_case() -> None:
         cases += [("clip, sphere, self-contact", replace(touching, contact=(Sphere(ball_centre, BALL_RADIUS, "ball"),))),
                   (f"clip, icosphere ({ball.faces.shape[0]}), self-c.",
                    replace(touching, contact=(Mesh(ball.vertices + ball_centre, ball.faces, "ball"),)))]
+    plain_time = math.nan  # s, the median without contact (the first case), for --breakdown's ratios
     for label, problem in cases:
         started = time.perf_counter()  # the first in this process: the contact kernels loaded from Numba's cache
         result = solve(problem, estimate_error=False)
@@ -111,6 +116,10 @@ def mesh_case() -> None:
         print(f"{label:32s} median {1e3 * np.median(times):8.1f} ms (first {1e3 * first:.0f} ms)  {result.iterations:5d} "
               f"Newton iterations  {result.steps:4d} steps" + (f"; smallest gap {gap:.4f} mm" if gap is not None else ""),
               flush=True)
+        if "--breakdown" in sys.argv and problem.contact:
+            print_breakdown(breakdown(lambda: solve(problem, estimate_error=False)), float(np.median(times)), plain_time)
+        elif not problem.contact:
+            plain_time = float(np.median(times))
         if "--sweep" in sys.argv:  # median of 3 sweeps (each places the hose first: not in the figure)
             sweeps = [run_sweep(SweepProblem(problem, None, "arm", (generated_motion("arm", [SWEEP_MOTION]),),
                                              compare_free_roll=False)) for _ in range(3)]
@@ -126,6 +135,29 @@ def mesh_case() -> None:
     print(f"packing the strut's mesh afresh (its trees, merged vertices, patches, edges): median "
           f"{1e3 * np.median(packing):.0f} ms")
     print(f"load average {os.getloadavg()[0]:.1f}")
+
+
+def print_breakdown(figures: dict, median: float, plain_time: float) -> None:
+    """The lines of --breakdown: contact_breakdown.breakdown's figures of one solve, and as multiples of the placement
+    without contact (plain_time, s) the median (s) scaled by the share left were the mesh searches free, and were the
+    path steps that do not converge free as well."""
+    seconds, counts = figures["seconds"], figures["counts"]
+    total = seconds["total"]
+    print(f"{'':32s} one solve timed by part: {1e3 * total:.0f} ms, {counts.get('evaluations', 0)} evaluations for "
+          f"{figures['iterations']} Newton iterations")
+    for part in ("path steps, converged", "path steps, not converged", "walks downhill", "narrowings and polish",
+                 "mesh searches"):
+        if part in seconds:
+            calls = (", ".join(f"{name.split()[-1]} {count}" for name, count in counts.items()
+                               if name.startswith("mesh search")) if part == "mesh searches" else
+                     f"{counts[part]} calls, {counts[part + ': Newton iterations']} Newton iterations, mesh searches "
+                     f"{1e3 * seconds.get(part + ': mesh searches', 0.0):.1f} ms")
+            print(f"{'':34s}{part:26s} {1e3 * seconds[part]:7.1f} ms ({100 * seconds[part] / total:4.1f} %): {calls}")
+    searches = seconds.get("mesh searches", 0.0)
+    failed = seconds.get("path steps, not converged", 0.0) - seconds.get("path steps, not converged: mesh searches", 0.0)
+    for label, left in (("the mesh searches free", total - searches),
+                        ("those and the path steps that do not converge free", total - searches - failed)):
+        print(f"{'':34s}were {label}: {left / total * median / plain_time:.1f}x the placement without contact")
 
 
 def main() -> None:

@@ -182,3 +182,43 @@ def test_a_snap_that_finds_no_stable_state_says_where_the_hose_was_pressed_befor
     push, gap = re.search(r"pressed hardest against 'lifter' at \w+ \d+ \(([^ ]+) N, gap ([^ ]+) mm\)",
                           str(failure.value)).groups()
     assert np.isfinite(float(push)) and float(gap) > 0.0
+
+
+def test_a_pose_solved_without_the_step_filter_is_the_one_the_filtered_newton_reaches(monkeypatch, carried_drum):
+    """Each pose is first solved by the contact Newton without its step filter, taken where it converges and the move
+    check admits the whole move from the last equilibrium (quasi_static._Tracker._contact_solve).  The drum carried
+    with the hose takes it at every pose but two: the second, where the hose is predicted where it was (no secant yet),
+    inside the drum turned with the arm, and the first of the lift, predicted by the swing's secant; the lifters pushing the hose up take it where they do not start inside it,
+    and end at every pose where the filtered Newton and the continuation end without it (to 1e-9 L).  The thin plate
+    above guards the check: taken without it, the plate jumps across the hose."""
+    from hoseline.procedures.sweep import quasi_static
+
+    solve = quasi_static.solve_with_contact
+    tries = []
+
+    def counted(*args, **options):
+        result = solve(*args, **options)
+        if not options.get("filtered", True):
+            tries.append(result[1].converged)
+        return result
+
+    def never(*args, **options):  # the first try left out: the filtered path of before
+        if not options.get("filtered", True):
+            return args[2], quasi_static.NewtonReport(False, 0, float("inf"), -1, "left out")
+        return solve(*args, **options)
+
+    monkeypatch.setattr(quasi_static, "solve_with_contact", counted)
+    again = run_sweep(carried_drum.sweep)
+    first_of_stage = [stage.first for stage in carried_drum.sweep.stages]  # (0, 9): the swing's and the lift's
+    assert [k for k, converged in enumerate(tries) if not converged] == [1, first_of_stage[1]]
+    np.testing.assert_allclose(again.centerlines, carried_drum.centerlines, atol=0.0)
+    for obstacle in LIFTERS.values():
+        sweep = sweep_from_dict(sagging(obstacle, steps=10))
+        monkeypatch.setattr(quasi_static, "solve_with_contact", counted)
+        tries.clear()
+        first = run_sweep(sweep)
+        assert len(tries) == sweep.pose_count and any(tries)
+        monkeypatch.setattr(quasi_static, "solve_with_contact", never)
+        filtered = run_sweep(sweep)
+        np.testing.assert_allclose(first.centerlines, filtered.centerlines, atol=1e-9 * LENGTH)
+        np.testing.assert_allclose(first.contacts[0].total_force, filtered.contacts[0].total_force, atol=1e-9 * WEIGHT)

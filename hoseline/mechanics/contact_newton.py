@@ -433,6 +433,7 @@ def solve_with_contact(
     max_halvings: int = 30,
     start_is_clear: bool = False,
     stall: int = 0,
+    filtered: bool = True,
 ) -> tuple[RodState, NewtonReport]:
     """Newton iterations from `state` (which must not penetrate) to an equilibrium with contact.
 
@@ -445,6 +446,11 @@ def solve_with_contact(
     fine mesh that search costs as much as an iteration's pairs).
     stall: if above 0, give up ("stalled") after that many iterations in a row whose step was cut below
     STALLED_STEP: a continuation halves its step sooner than Newton creeps on (0: never).
+    filtered: False leaves out the step filter: a trial is taken where the residual falls, and the answer may lie
+    beyond an obstacle or the hose itself (a step may carry a station through a thin mesh, or the hose through
+    itself).  Only for a caller that then checks the whole move from a known clear equilibrium to the answer (the
+    sweep's poses, procedures/sweep/quasi_static.py: contact_motion's move check) and, where that fails, solves again
+    with the filter.
     Unstable directions counted by the KKT pivots at the converged state are confirmed by the dense
     reduced Hessian (_lowest_mode): an eigenvalue above -NEUTRAL times the largest is zero (neutral).
     One BLAS thread: the dense systems are small, and threads only contend for the cores (10x
@@ -452,10 +458,11 @@ def solve_with_contact(
     """
     with one_blas_thread():
         return _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings,
-                                   start_is_clear, stall)
+                                   start_is_clear, stall, filtered)
 
 
-def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings, start_is_clear, stall):
+def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, max_halvings, start_is_clear, stall,
+                        filtered):
     """solve_with_contact without the thread limit."""
     inside = None if start_is_clear else model.penetration(centerline(state.frames, clamps.start_point,
                                                                       props.segment_length))
@@ -476,20 +483,20 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
         if not np.all(np.isfinite(step)):  # e.g. a free tip: its constraint rows are empty (see _multipliers)
             return state, NewtonReport(False, iteration, system.residual, unstable,
                                        "non-finite Newton step (a singular system)")
-        watch = step_filter(props, clamps, state, step, model)
-        alpha = watch.limit
+        watch = step_filter(props, clamps, state, step, model) if filtered else None
+        alpha = watch.limit if filtered else 1.0
         accepted = None
         # a trial is taken where the step filter admits it and the residual falls; the cheaper test first: the
         # filter's few distances without meshes, the evaluation with them (a mesh's swept check costs more)
         filter_first = model.mesh.count == 0
         for _ in range(max_halvings):
             trial = apply_step(props, clamps, state, alpha * step, alpha * force_step)
-            if filter_first and not watch.admits(props, clamps, trial, model, alpha):
+            if filtered and filter_first and not watch.admits(props, clamps, trial, model, alpha):
                 alpha *= 0.5
                 continue
             trial_system = evaluate_contact(props, clamps, trial, model)
             falls = trial_system.residual < (1.0 - 1e-4 * alpha) * system.residual or trial_system.residual <= tolerance
-            if falls and (filter_first or watch.admits(props, clamps, trial, model, alpha)):
+            if falls and (not filtered or filter_first or watch.admits(props, clamps, trial, model, alpha)):
                 accepted = trial, trial_system
                 break
             if not falls and unstable == 0 and _rod_alone(system) and _rod_alone(trial_system):

@@ -15,9 +15,11 @@
    and sliding clips free); their reactions, and the arc length of sliding clips, per pose.
 5. With contact ([contact] in the problem: obstacles fixed or moving with a body, self-contact)
    every pose is solved with the contact Newton, with the obstacles moved to the pose
-   (procedures/contact/moving.py), from the secant prediction or the previous equilibrium, the
-   first that the move check admits (no obstacle can have passed through the hose on the way
-   there), and followed by contact continuation (procedures/contact/) along the interpolated poses
+   (procedures/contact/moving.py): first from the secant prediction without the Newton's step
+   filter, kept where the move check admits the whole move to the answer (no obstacle, nor the
+   hose itself, can have been crossed on the way there); else from the secant prediction or the
+   previous equilibrium, the first that the move check admits, with the filter; and followed by
+   contact continuation (procedures/contact/) along the interpolated poses
    of the bodies, obstacles' too, when that fails; a fold or a loss of stability there is a snap
    downhill.  Per pose and obstacle: the smallest gap, the total force and the length in contact;
    the start mount's reaction includes the contact loads.
@@ -43,7 +45,7 @@ from hoseline.model.motion import Pose, interpolate
 from hoseline.model.mounts import Mount, single_plane_offset
 from hoseline.model.sweep import SweepProblem
 from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact
-from hoseline.procedures.contact.moving import MovingObstacles, ObstaclePath
+from hoseline.procedures.contact.moving import MovingObstacles, ObstaclePath, PlacedObstacles
 from hoseline.procedures.contact.placement import contact_forces_beyond, contact_reports, problem_contact_model
 from hoseline.procedures.geometry.clearance import TriangleIndex, nearest_with_fittings
 from hoseline.procedures.placement.continuation import (
@@ -62,6 +64,10 @@ from hoseline.procedures.sweep.result import ObstacleClearance, Snap, SweepConta
 JUMP_FACTOR = 3.0  # a step moving a station more than this times the mounts' movement is followed in sub-steps
 CAREFUL = StepControl(first=0.1, largest=0.1)  # sub-steps of a suspicious step
 PLAIN = StepControl(first=1.0, largest=1.0)  # one step, halved as needed
+UNFILTERED_ITERATIONS = 10  # of a pose's first try with contact, Newton without its step filter (_contact_solve): a
+# pose the sweep carries smoothly takes one to eight; one an obstacle pushes into the hose fails early (its start
+# inside) or creeps, and the filtered Newton and the continuation take it on
+UNFILTERED_HALVINGS = 10  # of a Newton step in that try
 
 
 @dataclass
@@ -139,15 +145,10 @@ class _Tracker:
         placed = None
         if self.obstacles is None:
             trial, report = solve_equilibrium(self.props, clamps, guesses[0])
-        else:  # from the prediction or the previous equilibrium, if no obstacle can pass through the hose on the way
+            iterations = report.iterations
+        else:
             placed = self.obstacles.at(target)
-            begin = self.obstacles.start(self.props, (self.clamps_now, self.state, self.placed), clamps, placed,
-                                         guesses)
-            trial, report = self.state, NewtonReport(False, 0, math.inf, -1, "no start the move check admits")
-            if begin is not None:
-                trial, report = solve_with_contact(self.props, clamps, begin, placed.model, tolerance=CONTACT_TOLERANCE,
-                                                   start_is_clear=True)
-        iterations = report.iterations
+            trial, report, iterations = self._contact_solve(clamps, placed, guesses)
         events: list[str] = []
         jump = _largest_movement(old_nodes, stations(self.props, clamps, trial)) if report.converged else math.inf
         if not (report.converged and report.unstable_directions == 0 and jump <= limit):
@@ -177,6 +178,30 @@ class _Tracker:
             self.before = self.state
         self.state, self.poses, self.placed, self.clamps_now = trial, target, placed, clamps
         return _Reached(trial, clamps, None if placed is None else placed.model, iterations, events, jump)
+
+    def _contact_solve(self, clamps: Clamps, placed: PlacedObstacles,
+                       guesses: list[RodState]) -> tuple[RodState, NewtonReport, int]:
+        """(state, report, Newton iterations) of the contact Newton at the next pose (clamps, obstacles `placed`).
+
+        First Newton without its step filter from the first guess, taken where it converges and the move check admits
+        the whole move from the last equilibrium to it (MovingObstacles.move_is_clear: no obstacle, nor the hose
+        itself, can have been crossed on the way, whatever path Newton's iterates took; the one check in place of the
+        move check of the start and the step filter of each Newton step, a third of a pose's time on the 100 000-triangle
+        strut of bench/bench_contact_placement.py).  Where it does not, as before: from the prediction or the last
+        equilibrium, the first the move check admits, with the step filter."""
+        before = (self.clamps_now, self.state, self.placed)
+        trial, report = solve_with_contact(self.props, clamps, guesses[0], placed.model, tolerance=CONTACT_TOLERANCE,
+                                           max_iterations=UNFILTERED_ITERATIONS, max_halvings=UNFILTERED_HALVINGS,
+                                           start_is_clear=True, filtered=False)
+        if report.converged and self.obstacles.move_is_clear(self.props, before, (clamps, trial, placed)):
+            return trial, report, report.iterations
+        spent = report.iterations
+        begin = self.obstacles.start(self.props, before, clamps, placed, guesses)
+        if begin is None:
+            return self.state, NewtonReport(False, 0, math.inf, -1, "no start the move check admits"), spent
+        trial, report = solve_with_contact(self.props, clamps, begin, placed.model, tolerance=CONTACT_TOLERANCE,
+                                           start_is_clear=True)
+        return trial, report, spent + report.iterations
 
     def _largest_carry(self, target: Mapping[str | None, Pose], nodes: np.ndarray) -> float:
         """A bound (mm) of how far a station moves if the hose moved rigidly with either mount, a clip, or the body
