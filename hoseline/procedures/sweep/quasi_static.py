@@ -72,11 +72,12 @@ UNFILTERED_HALVINGS = 10  # of a Newton step in that try
 
 @dataclass
 class _Reached:
-    """One pose reached: the state, its clamps, the contact model there (None without contact), the Newton
-    iterations and what was logged."""
+    """One pose reached: the state, its clamps and stations, the contact model there (None without contact), the
+    Newton iterations and what was logged."""
 
     state: RodState
     clamps: Clamps
+    nodes: np.ndarray  # its stations, mm
     contact: ContactModel | None
     iterations: int
     events: list[str]
@@ -116,6 +117,7 @@ class _Tracker:
                           if sweep.problem.has_contact else None)
         self.placed = self.obstacles.at(self.poses) if self.obstacles is not None else None
         self.clamps_now = self.clamps(self.poses)  # the clamps of the equilibrium reached last
+        self.nodes = stations(self.props, self.clamps_now, self.state)  # its stations, mm
 
     def clamps(self, poses: Mapping[str | None, Pose]) -> Clamps:
         """The clamps with each body at poses[body]: the fittings' and the clips'."""
@@ -139,7 +141,8 @@ class _Tracker:
         """Reach the equilibrium at sweep pose `index` from the current one."""
         target = {body: self.sweep.pose(body, index) for body in self.poses}
         clamps = self.clamps(target)
-        old_nodes = stations(self.props, clamps, self.state)
+        # the last equilibrium's stations under the new clamps: only the start point moves them (station_positions)
+        old_nodes = self.nodes + (clamps.start_point - self.clamps_now.start_point)
         limit = JUMP_FACTOR * self._largest_carry(target, old_nodes) + 1e-6 * self.props.length
         guesses = [self.state] if self.before is None else [_secant(self.before, self.state), self.state]
         placed = None
@@ -150,7 +153,8 @@ class _Tracker:
             placed = self.obstacles.at(target)
             trial, report, iterations = self._contact_solve(clamps, placed, guesses)
         events: list[str] = []
-        jump = _largest_movement(old_nodes, stations(self.props, clamps, trial)) if report.converged else math.inf
+        nodes = stations(self.props, clamps, trial)
+        jump = _largest_movement(old_nodes, nodes) if report.converged else math.inf
         if not (report.converged and report.unstable_directions == 0 and jump <= limit):
             start_poses = self.poses
 
@@ -170,14 +174,15 @@ class _Tracker:
                                        before=self.before)[0]
             events = self.log.events[logged:]
             iterations += self.log.iterations - counted
-            jump = _largest_movement(old_nodes, stations(self.props, clamps, trial))
+            nodes = stations(self.props, clamps, trial)
+            jump = _largest_movement(old_nodes, nodes)
             # a new branch or a sharp turn: no secant across it (with contact only across a snap: the move check
             # keeps a poor prediction from being used, and an obstacle that moves with the hose needs one)
             self.before = self.state if self.obstacles is not None and not events else None
         else:
             self.before = self.state
-        self.state, self.poses, self.placed, self.clamps_now = trial, target, placed, clamps
-        return _Reached(trial, clamps, None if placed is None else placed.model, iterations, events, jump)
+        self.state, self.poses, self.placed, self.clamps_now, self.nodes = trial, target, placed, clamps, nodes
+        return _Reached(trial, clamps, nodes, None if placed is None else placed.model, iterations, events, jump)
 
     def _contact_solve(self, clamps: Clamps, placed: PlacedObstacles,
                        guesses: list[RodState]) -> tuple[RodState, NewtonReport, int]:
@@ -210,6 +215,8 @@ class _Tracker:
         moves = [0.0]
         points = (problem.start.point, problem.end.point) + tuple(clip.point for clip in self.clips)
         for body, point in zip(self.bodies, points):
+            if body is None:  # fixed: at its design position at every pose
+                continue
             old, new = self.poses[body], target[body]
             moves.append(float(np.linalg.norm(new.point(point) - old.point(point))) + self.props.length * old.angle_to(new))
         for body in () if self.obstacles is None else set(self.obstacles.bodies) - {None}:
@@ -275,7 +282,7 @@ def _run_sweep(sweep: SweepProblem, progress: Progress | None, equilibria: list 
         solve_time += time.perf_counter() - tick
         if equilibria is not None:
             equilibria.append((reached.clamps, reached.state))
-        nodes = stations(tracker.props, reached.clamps, reached.state)
+        nodes = reached.nodes
         centerlines[k] = nodes
         if n_clips:
             stretched[k] = station_positions(tracker.props, reached.clamps, reached.state)[0]
