@@ -187,10 +187,11 @@ def test_a_snap_that_finds_no_stable_state_says_where_the_hose_was_pressed_befor
 def test_a_pose_solved_without_the_step_filter_is_the_one_the_filtered_newton_reaches(monkeypatch, carried_drum):
     """Each pose is first solved by the contact Newton without its step filter, taken where it converges and the move
     check admits the whole move from the last equilibrium (quasi_static._Tracker._contact_solve).  The drum carried
-    with the hose takes it at every pose but two: the second, where the hose is predicted where it was (no secant yet),
-    inside the drum turned with the arm, and the first of the lift, predicted by the swing's secant; the lifters pushing the hose up take it where they do not start inside it,
-    and end at every pose where the filtered Newton and the continuation end without it (to 1e-9 L).  The thin plate
-    above guards the check: taken without it, the plate jumps across the hose."""
+    with the hose takes it at every pose but two: the second, where the hose is predicted where it was (no secant
+    yet), inside the drum turned with the arm, and the first of the lift, predicted by the swing's secant.  The
+    lifters pushing the hose up take it where they do not start inside it, and end at every pose where the filtered
+    Newton and the continuation end without it (to 1e-9 L).  The thin plate above guards the check: taken without
+    it, the plate jumps across the hose."""
     from hoseline.procedures.sweep import quasi_static
 
     solve = quasi_static.solve_with_contact

@@ -191,9 +191,9 @@ class _Tracker:
         First Newton without its step filter from the first guess, taken where it converges and the move check admits
         the whole move from the last equilibrium to it (MovingObstacles.move_is_clear: no obstacle, nor the hose
         itself, can have been crossed on the way, whatever path Newton's iterates took; the one check in place of the
-        move check of the start and the step filter of each Newton step, a third of a pose's time on the 100 000-triangle
-        strut of bench/bench_contact_placement.py).  Where it does not, as before: from the prediction or the last
-        equilibrium, the first the move check admits, with the step filter."""
+        move check of the start and the step filter of each Newton step, a third of a pose's time on the 100 000-
+        triangle strut of bench/bench_contact_placement.py).  Where it does not, as before: from the prediction or the
+        last equilibrium, the first the move check admits, with the step filter."""
         before = (self.clamps_now, self.state, self.placed)
         trial, report = solve_with_contact(self.props, clamps, guesses[0], placed.model, tolerance=CONTACT_TOLERANCE,
                                            max_iterations=UNFILTERED_ITERATIONS, max_halvings=UNFILTERED_HALVINGS,
