@@ -68,6 +68,9 @@ UNFILTERED_ITERATIONS = 10  # of a pose's first try with contact, Newton without
 # pose the sweep carries smoothly takes one to eight; one an obstacle pushes into the hose fails early (its start
 # inside) or creeps, and the filtered Newton and the continuation take it on
 UNFILTERED_HALVINGS = 10  # of a Newton step in that try
+UNFILTERED_WAITING = 16  # after k refused tries in a row, the next 2^k - 1 poses (at most this many) go without one:
+# an obstacle pushing the hose pose after pose refuses most (random sweeps over planes, boxes, balls and cylinders
+# took up to 1.8 times the Newton iterations trying at every pose)
 
 
 @dataclass
@@ -118,6 +121,8 @@ class _Tracker:
         self.placed = self.obstacles.at(self.poses) if self.obstacles is not None else None
         self.clamps_now = self.clamps(self.poses)  # the clamps of the equilibrium reached last
         self.nodes = stations(self.props, self.clamps_now, self.state)  # its stations, mm
+        self.unfiltered_refused = 0  # poses in a row whose try without the step filter was refused (_contact_solve)
+        self.unfiltered_waiting = 0  # poses left to solve without that try
 
     def clamps(self, poses: Mapping[str | None, Pose]) -> Clamps:
         """The clamps with each body at poses[body]: the fittings' and the clips'."""
@@ -193,14 +198,22 @@ class _Tracker:
         itself, can have been crossed on the way, whatever path Newton's iterates took; the one check in place of the
         move check of the start and the step filter of each Newton step, a third of a pose's time on the 100 000-
         triangle strut of bench/bench_contact_placement.py).  Where it does not, as before: from the prediction or the
-        last equilibrium, the first the move check admits, with the step filter."""
+        last equilibrium, the first the move check admits, with the step filter.  After k refused tries in a row the
+        next 2^k - 1 poses (at most UNFILTERED_WAITING) are solved the filtered way at once."""
         before = (self.clamps_now, self.state, self.placed)
-        trial, report = solve_with_contact(self.props, clamps, guesses[0], placed.model, tolerance=CONTACT_TOLERANCE,
-                                           max_iterations=UNFILTERED_ITERATIONS, max_halvings=UNFILTERED_HALVINGS,
-                                           start_is_clear=True, filtered=False)
-        if report.converged and self.obstacles.move_is_clear(self.props, before, (clamps, trial, placed)):
-            return trial, report, report.iterations
-        spent = report.iterations
+        spent = 0
+        if self.unfiltered_waiting > 0:
+            self.unfiltered_waiting -= 1
+        else:
+            trial, report = solve_with_contact(self.props, clamps, guesses[0], placed.model,
+                                               tolerance=CONTACT_TOLERANCE, max_iterations=UNFILTERED_ITERATIONS,
+                                               max_halvings=UNFILTERED_HALVINGS, start_is_clear=True, filtered=False)
+            if report.converged and self.obstacles.move_is_clear(self.props, before, (clamps, trial, placed)):
+                self.unfiltered_refused = 0
+                return trial, report, report.iterations
+            spent = report.iterations
+            self.unfiltered_refused += 1
+            self.unfiltered_waiting = min(2 ** self.unfiltered_refused - 1, UNFILTERED_WAITING)
         begin = self.obstacles.start(self.props, before, clamps, placed, guesses)
         if begin is None:
             return self.state, NewtonReport(False, 0, math.inf, -1, "no start the move check admits"), spent
