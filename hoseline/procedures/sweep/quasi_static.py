@@ -158,8 +158,8 @@ class _Tracker:
             placed = self.obstacles.at(target)
             trial, report, iterations = self._contact_solve(clamps, placed, guesses)
         events: list[str] = []
-        nodes = stations(self.props, clamps, trial)
-        jump = _largest_movement(old_nodes, nodes) if report.converged else math.inf
+        nodes = stations(self.props, clamps, trial) if report.converged else None
+        jump = _largest_movement(old_nodes, nodes) if nodes is not None else math.inf
         if not (report.converged and report.unstable_directions == 0 and jump <= limit):
             start_poses = self.poses
 
