@@ -31,7 +31,8 @@ ENVELOPE_FILE = "envelope.stl"
 def poses_csv(result: SweepResult) -> str:
     """One row per pose: stage, travel, the fitting tips and directions, clearance to each obstacle,
     bend radius, moments, reactions, clip loads, and per [contact] obstacle its force, smallest gap and
-    length in contact (mm, N, N*mm; directions are unit vectors into the hose)."""
+    length in contact (mm, N, N*mm; directions are unit vectors into the hose).  Reactions, clip loads and
+    contact forces come as magnitudes (<name>_N, <name>_Nmm) and as world components (<name>_x_N, ...)."""
     columns = {"pose": np.arange(result.pose_count), "stage": [_stage(result, k) for k in range(result.pose_count)],
                "travel": without_round_off(result.sweep.travel)}
     for end in ("start", "end"):
@@ -46,18 +47,17 @@ def poses_csv(result: SweepResult) -> str:
     columns["max_twisting_moment_Nmm"] = without_round_off(result.max_twisting_moment)
     columns["max_differential_torque_Nmm"] = without_round_off(result.max_differential_torque)
     columns["single_plane_offset_mm"] = without_round_off(result.single_plane_offset)
-    for name in ("start_force", "start_moment", "end_force", "end_moment"):
-        unit = "N" if name.endswith("force") else "Nmm"
-        columns[f"{name}_{unit}"] = without_round_off(np.linalg.norm(getattr(result, name), axis=1))
+    for name in ("start_force", "start_moment", "end_force", "end_moment"):  # the mounts' reactions on the hose
+        columns |= _vector_columns(name, getattr(result, name), "N" if name.endswith("force") else "Nmm")
     for j, clip in enumerate(result.sweep.problem.clips):  # each clip's load on the hose (and where it holds it)
         label = f"clip_{j + 1}"
-        columns[f"{label}_force_N"] = without_round_off(np.linalg.norm(result.clip_forces[:, j], axis=1))
-        columns[f"{label}_moment_Nmm"] = without_round_off(np.linalg.norm(result.clip_moments[:, j], axis=1))
+        columns |= _vector_columns(f"{label}_force", result.clip_forces[:, j], "N")
+        columns |= _vector_columns(f"{label}_moment", result.clip_moments[:, j], "Nmm")
         if clip.slides:
             columns[f"{label}_arc_length_mm"] = without_round_off(result.clip_arc_lengths[:, j])
     for contact in result.contacts:  # each [contact] obstacle's push on the hose, the smallest gap, the length touching
         label = f"contact_{contact.name}"
-        columns[f"{label}_force_N"] = without_round_off(np.linalg.norm(contact.total_force, axis=1))
+        columns |= _vector_columns(f"{label}_force", contact.total_force, "N")
         columns[f"{label}_gap_mm"] = without_round_off(contact.min_gap)
         columns[f"{label}_length_mm"] = without_round_off(contact.length_in_contact)
     if result.separation is not None:
@@ -69,6 +69,14 @@ def poses_csv(result: SweepResult) -> str:
     for k in range(result.pose_count):
         writer.writerow(_cell(values[k]) for values in columns.values())
     return stream.getvalue()
+
+
+def _vector_columns(name: str, vectors: np.ndarray, unit: str) -> dict[str, np.ndarray]:
+    """Columns of a vector per pose, (M, 3) in `unit`: its magnitude (<name>_<unit>), then its world
+    components (<name>_x_<unit>, <name>_y_<unit>, <name>_z_<unit>), round-off relative to the largest of them all."""
+    components = without_round_off(vectors)
+    return {f"{name}_{unit}": without_round_off(np.linalg.norm(vectors, axis=1))} | {
+        f"{name}_{axis}_{unit}": components[:, i] for i, axis in enumerate("xyz")}
 
 
 def shapes_csv(result: SweepResult) -> str:

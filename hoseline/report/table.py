@@ -69,4 +69,10 @@ def summary_table(results: Sequence[Result], labels: Sequence[str], title: str =
                       *("" if clip is None else f"{_number(float(np.linalg.norm(clip.force)))} ({clip.kind})" for clip in clips))
         table.add_row(f"clip {index + 1} moment", "N*mm",
                       *("" if clip is None else _number(float(np.linalg.norm(clip.moment))) for clip in clips))
+        table.add_row(f"clip {index + 1} axial torque", "N*mm",
+                      *("" if clip is None else _number(clip.axial_torque) for clip in clips))
+        if any(clip is not None and clip.locked_roll_deg is not None for clip in clips):  # fixed clips
+            table.add_row(f"clip {index + 1} locked roll", "deg",
+                          *("" if clip is None or clip.locked_roll_deg is None else _fixed(clip.locked_roll_deg)
+                            for clip in clips))
     return table

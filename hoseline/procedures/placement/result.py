@@ -54,7 +54,10 @@ class ClipReaction:
     clip's on the hose (world axes).  A rotating or sliding clip's moment has no component along
     its axis (the hose rolls freely in it); a ball clip carries a force only.  A sliding clip's
     arc_length is the one the solve found.  frame: (3, 3) the clip frame as it holds the hose
-    (rows d1, d2, d3; d3 along the hose, the roll found included), None for a ball clip."""
+    (rows d1, d2, d3 in world components; d3 along the hose, the roll found included), None for a
+    ball clip.  locked_roll_deg: a fixed clip's roll at which the placement locked it, degrees
+    (right-handed about the clip direction, from the clip frame the place phase carries the start
+    fitting's frame to: see placement/sequence.PlacementPath); None for the other kinds."""
 
     kind: str
     name: str
@@ -63,11 +66,20 @@ class ClipReaction:
     force: np.ndarray
     moment: np.ndarray
     frame: np.ndarray | None = None
+    locked_roll_deg: float | None = None
+
+    @property
+    def axial_torque(self) -> float:
+        """The clip's moment on the hose about the hose tangent through the clip (the frame's d3), N*mm;
+        zero (to round-off) for a rotating or sliding clip, in which the hose rolls freely, and for a ball clip."""
+        return 0.0 if self.frame is None else float(self.moment @ self.frame[2])
 
     def summary(self) -> dict:
         """For result.json (user units)."""
         return {"type": self.kind, "name": self.name, "arc_length_mm": self.arc_length, "point_mm": self.point.tolist(),
-                "force_N": self.force.tolist(), "moment_Nmm": self.moment.tolist()}
+                "force_N": self.force.tolist(), "moment_Nmm": self.moment.tolist(),
+                "axial_torque_Nmm": self.axial_torque, "locked_roll_deg": self.locked_roll_deg,
+                "frame": None if self.frame is None else self.frame.tolist()}
 
 
 @dataclass(frozen=True)

@@ -121,8 +121,24 @@ def clip_reactions(problem: Problem, props: RodProperties, clamps: Clamps, state
     forces, moments = clipped_newton.clip_reactions(props, clamps, state)
     arc_lengths = clipped_newton.clip_arc_lengths(props, clamps, state)  # where sliding clips came to rest
     _, _, frames, framed, _ = clipped_newton.clip_arrays(clamps, state)  # with the rolls found
+    rolls = locked_clip_rolls(problem, clamps)
     return [
         ClipReaction(clip.kind, clip.name, float(arc) if clip.slides else clip.arc_length, clip.point.copy(), force,
-                     moment, frame.copy() if held else None)
-        for clip, force, moment, arc, frame, held in zip(problem.clips, forces, moments, arc_lengths, frames, framed)
+                     moment, frame.copy() if held else None, roll)
+        for clip, force, moment, arc, frame, held, roll in zip(problem.clips, forces, moments, arc_lengths, frames,
+                                                                framed, rolls)
+    ]
+
+
+def locked_clip_rolls(problem: Problem, clamps: Clamps) -> list[float | None]:
+    """The roll (degrees, right-handed about the clip direction) at which `clamps` hold each fixed clip, measured
+    from the frame the place phase carries the clip to with its roll free (PlacementPath.place(1)); None for
+    the other kinds.  The placement locks a fixed clip at the torque-free roll of the end of the place phase."""
+    from hoseline.procedures.placement.sequence import PlacementPath  # sequence.py imports this module
+
+    carried = PlacementPath(problem).place(1.0).clips
+    return [
+        math.degrees(math.atan2(float(held.frame[0] @ free.frame[1]), float(held.frame[0] @ free.frame[0])))
+        if clip.kind == "fixed" else None
+        for clip, held, free in zip(problem.clips, clamps.clips, carried)
     ]
