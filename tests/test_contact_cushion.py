@@ -1,5 +1,7 @@
 """The placement path with contact followed on a cushion (procedures/contact/cushion.py): the same equilibrium as the
-path followed with the model's own barrier all along, the roll locked only after narrowing, and the fall-back."""
+path followed with the model's own barrier all along, the roll locked only after narrowing, and the fall-back.
+The obstacles are present all along the path here (contact_placement "along_path"); the default brings them in
+after the free placement (tests/test_contact_bring_in.py)."""
 
 from dataclasses import replace
 
@@ -34,7 +36,7 @@ def strut_problem(sense: float):
     centre = placed.centerline[25] + side * (plain.hose.outer_radius + STRUT_RADIUS - 1.0)
     axis = np.cross(tangent, side) / np.linalg.norm(np.cross(tangent, side))
     strut = Cylinder(centre - 100.0 * axis, centre + 100.0 * axis, STRUT_RADIUS, "strut")
-    return replace(clipped, contact=(strut,), self_contact=True)
+    return replace(clipped, contact=(strut,), self_contact=True, contact_placement="along_path")
 
 
 @pytest.fixture(scope="module")
@@ -144,7 +146,8 @@ def drum_cases():
         "hose": {"length": 335.0, "outer_diameter": 10.0, "bending_stiffness": 1e5, "segments": 50},
         "start": {"point": [-100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
         "end": {"point": [100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
-        "contact": {"obstacles": [{"kind": "cylinder", "start": [0.0, -200.0, 0.0], "end": [0.0, 200.0, 0.0],
+        "contact": {"placement": "along_path",
+                    "obstacles": [{"kind": "cylinder", "start": [0.0, -200.0, 0.0], "end": [0.0, 200.0, 0.0],
                                    "radius": 30.0, "name": "drum"}]}})
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(cushion, "CUSHION_RADII", 0.0)

@@ -93,11 +93,21 @@ def test_mounts_and_drum_balance_and_the_internal_force_carries_the_push(over_th
     assert summary["name"] == "drum" and len(summary["points"]) == drum.gap.size
 
 
-def test_a_start_inside_an_obstacle_is_refused_naming_it():
+def test_along_the_path_a_start_inside_an_obstacle_is_refused_naming_it():
     ball = {"kind": "sphere", "center": [-100.0, 0.0, 50.0], "radius": 10.0, "name": "ball"}  # on the straight start
     with pytest.raises(PlacementError) as error:
-        solve(problem_from_dict(with_contact({"obstacles": [ball]})), estimate_error=False)
+        solve(problem_from_dict(with_contact({"placement": "along_path", "obstacles": [ball]})), estimate_error=False)
     assert "'ball'" in str(error.value) and "straight hose" in str(error.value)
+
+
+def test_brought_in_an_obstacle_on_the_straight_start_only_is_no_obstacle_and_is_reported_clear():
+    ball = {"kind": "sphere", "center": [-100.0, 0.0, 50.0], "radius": 10.0, "name": "ball"}  # on the straight start
+    result = solve(problem_from_dict(with_contact({"obstacles": [ball]})), estimate_error=False)
+    free = solve(problem_from_dict(BASE), estimate_error=False)
+    np.testing.assert_allclose(result.centerline, free.centerline, atol=1e-9)  # the free shape clears it
+    placement, = result.summary()["contact"]["placement"]
+    assert placement["name"] == "ball" and placement["rule"] == "clear" and placement["hose_side"] is None
+    assert placement["free_gap_mm"] == pytest.approx(result.contacts[0].min_gap)
 
 
 def test_a_sweep_file_takes_contact():  # the sweep itself: tests/test_sweep_contact.py
@@ -129,19 +139,38 @@ def test_accuracy_refuses_contact_up_front_instead_of_blaming_the_half_segment_s
         solve_to_accuracy(problem, 0.01)
 
 
-def test_an_end_mount_inside_an_obstacle_is_refused_naming_the_fitting_and_where_its_path_enters():
+def test_an_end_mount_inside_an_obstacle_is_refused_naming_the_fitting():
     sphere = {"kind": "sphere", "center": [100.0, 0.0, -82.0], "radius": 4.0, "name": "knob"}  # around the end point
     with pytest.raises(PlacementError) as failure:
         solve(problem_from_dict(with_contact({"obstacles": [sphere]})), estimate_error=False)
+    message = str(failure.value)
+    assert "the hose at the end fitting is held inside obstacle 'knob'" in message and "Move the obstacle" in message
+
+
+def test_along_the_path_an_end_mount_inside_an_obstacle_is_refused_naming_where_its_path_enters():
+    sphere = {"kind": "sphere", "center": [100.0, 0.0, -82.0], "radius": 4.0, "name": "knob"}  # around the end point
+    with pytest.raises(PlacementError) as failure:
+        solve(problem_from_dict(with_contact({"placement": "along_path", "obstacles": [sphere]})),
+              estimate_error=False)
     message = str(failure.value)
     assert "carries the end fitting on a straight line" in message and "obstacle 'knob'" in message
     assert re.search(r"between fractions 0\.\d+ and 1\.000", message)
 
 
-def test_a_drum_of_40_mm_lies_across_the_end_fitting_s_path_and_is_refused_before_any_solve():
+def test_a_drum_of_40_mm_across_the_end_fitting_s_path_is_brought_in_and_the_hose_rests_on_it():
+    result = solve(problem_from_dict(with_contact({"obstacles": [DRUM | {"radius": 40.0}]})), estimate_error=False)
+    drum, = result.contacts
+    assert 0.0 < drum.min_gap < DEFAULT_ACTIVATION and result.stable
+    assert np.hypot(result.centerline[:, 0], result.centerline[:, 2]).min() > 40.0 + HOSE_RADIUS
+    placement, = result.summary()["contact"]["placement"]
+    assert placement["rule"] == "least penetration" and placement["hose_side"][2] > 0.9  # the hose over the drum
+
+
+def test_along_the_path_a_drum_of_40_mm_across_the_end_fitting_s_path_is_refused_before_any_solve():
     # docs/model.md: it once stopped at fraction 0.67 of the place phase; the end fitting's straight path from the
     # straight hose's end (-100, 0, 255) to its mount (100, 0, -80) passes within the hose radius of the drum there
     with pytest.raises(PlacementError) as failure:
-        solve(problem_from_dict(with_contact({"obstacles": [DRUM | {"radius": 40.0}]})), estimate_error=False)
+        solve(problem_from_dict(with_contact({"placement": "along_path", "obstacles": [DRUM | {"radius": 40.0}]})),
+              estimate_error=False)
     assert "carries the end fitting" in str(failure.value)
     assert "obstacle 'drum' between fractions 0.680 and 0.705" in str(failure.value)

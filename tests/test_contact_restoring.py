@@ -13,7 +13,8 @@ from hoseline.procedures.placement.sequence import solve
 BASE = {"hose": {"length": 335.0, "outer_diameter": 10.0, "bending_stiffness": 1e5, "segments": 50},
         "start": {"point": [-100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
         "end": {"point": [100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
-        "contact": {"obstacles": [{"kind": "cylinder", "start": [0.0, -200.0, 0.0], "end": [0.0, 200.0, 0.0],
+        "contact": {"placement": "along_path",  # the drum met on the path, where the restoring steps act
+                    "obstacles": [{"kind": "cylinder", "start": [0.0, -200.0, 0.0], "end": [0.0, 200.0, 0.0],
                                    "radius": 30.0, "name": "drum"}]}}
 LOOP = {"hose": {"length": 1000.0, "outer_diameter": 10.0, "bending_stiffness": 1e5, "torsional_stiffness": 1e5,
                  "segments": 50},

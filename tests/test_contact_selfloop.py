@@ -217,7 +217,7 @@ def test_a_heavy_hose_placed_with_gravity_ramped_in_snaps_down_onto_the_floor_an
             "start": {"point": [0.0, 0.0, 100.0], "direction": [1.0, 0.0, 0.0]},
             "end": {"point": [150.0, 0.0, 100.0], "direction": [-1.0, 0.0, 0.0]},
             "environment": {"gravity": [0.0, 0.0, -9.81]},
-            "contact": {"self": itself,
+            "contact": {"self": itself, "placement": "along_path",
                         "obstacles": [{"kind": "plane", "point": [0, 0, 0], "normal": [0, 0, 1], "name": "floor"}]}}
     result = solve(problem_from_dict(data), estimate_error=False)
     assert any("snaps downhill" in event for event in result.events)  # the place phase lost stability
@@ -260,7 +260,8 @@ def test_a_path_that_creeps_fails_saying_so(monkeypatch):
                                           "segments": 50},
                                  "start": {"point": [-100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
                                  "end": {"point": [100.0, 0.0, -80.0], "direction": [0.0, 0.0, 1.0]},
-                                 "contact": {"obstacles": [{"kind": "cylinder", "start": [0.0, -200.0, 0.0],
+                                 "contact": {"placement": "along_path",
+                                             "obstacles": [{"kind": "cylinder", "start": [0.0, -200.0, 0.0],
                                                             "end": [0.0, 200.0, 0.0], "radius": 30.0}]}})
     assert solve(problem, estimate_error=False).stable
     monkeypatch.setattr(continuation, "MOST_ITERATIONS", 20)

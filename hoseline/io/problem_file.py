@@ -98,6 +98,8 @@ entering (frictionless), and the hose kept out of itself::
 
     [contact]
     self = true                      # optional, default false
+    placement = "bring_in"           # optional: the obstacles brought in after the free placement (default),
+                                     # or "along_path": present all along the published sequence
     [[contact.obstacles]]
     kind = "plane"                   # the hose stays on the side normal points to
     point = [0.0, 0.0, -40.0]        # mm
@@ -112,6 +114,8 @@ entering (frictionless), and the hose kept out of itself::
     start = [0.0, 0.0, 0.0]          # mm, the axis from start to end
     end = [0.0, 100.0, 0.0]
     radius = 15.0                    # mm
+    hose_side = [0.0, 0.0, 1.0]      # optional (not for a plane): the hose ends on this side of it (default: the
+                                     # side of least penetration of the free hose)
     [[contact.obstacles]]
     kind = "box"                     # sharp edges and corners
     center = [0.0, -60.0, 0.0]       # mm
@@ -209,6 +213,8 @@ _UNITS = {
     "self": "keep the hose out of itself",
     "kind": "plane, sphere, cylinder, box or mesh",
     "normal": "towards the side the hose stays on",
+    "hose_side": "direction from the obstacle to the side the hose ends on",
+    "contact.placement": "bring_in (obstacles after the free placement) or along_path",
     "center": "mm",
     "radius": "mm",
     "obstacles.start": "mm, one end of the axis",
@@ -611,12 +617,14 @@ class ContactObstacleSection(_Section):
     size: Point | None = None
     axes: list[Direction] | None = None
     file: str | None = None
+    hose_side: Direction | None = None
 
 
 class ContactSection(_Section):
-    """[contact]: self-contact and the obstacles the hose may touch."""
+    """[contact]: self-contact, the obstacles the hose may touch, and how the placement meets them."""
 
     self_contact: bool = Field(False, alias="self")
+    placement: str = "bring_in"
     obstacles: list[ContactObstacleSection] = Field(default_factory=list)
 
 
@@ -787,6 +795,8 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             fittings=fittings,
             contact=_contact_obstacles(spec.contact, Path.cwd() if base_dir is None else Path(base_dir)),
             self_contact=spec.contact is not None and spec.contact.self_contact,
+            contact_sides=() if spec.contact is None else tuple(table.hose_side for table in spec.contact.obstacles),
+            contact_placement="bring_in" if spec.contact is None else spec.contact.placement,
         )
     except ValueError as exc:  # the model's own checks; its messages name the field
         raise ProblemFileError(f"{source}: {exc}") from None
@@ -923,8 +933,10 @@ def _contact_dict(problem: Problem) -> dict[str, Any]:
                      "axes": [_floats(axis) for axis in obstacle.axes]}
         else:
             table = {"kind": "mesh", "file": obstacle.file}
-        tables.append(table | {"name": obstacle.name})
-    return {"contact": {"self": bool(problem.self_contact), "obstacles": tables}}
+        side = problem.side_of(obstacle.name)
+        tables.append(table | {"name": obstacle.name} | ({} if side is None else {"hose_side": _floats(side)}))
+    return {"contact": {"self": bool(problem.self_contact), "placement": problem.contact_placement,
+                        "obstacles": tables}}
 
 
 def _with_fittings_resolved(data: dict, source: str) -> tuple[dict, EndFittings | None]:

@@ -9,7 +9,7 @@ import numpy as np
 from hoseline.model.clips import Clip, clip_node, off_station_message
 from hoseline.model.fittings import EndFittings
 from hoseline.model.hose import Hose
-from hoseline.model.mounts import Mount, mount_distance
+from hoseline.model.mounts import Mount, mount_distance, unit_vector
 from hoseline.model.obstacles import Obstacle
 
 STRAIGHT_MARGIN = 1e-9  # relative: a hose pulled straight between its mounts has no equilibrium to solve for
@@ -36,6 +36,11 @@ class Problem:
     contact: obstacles the hose touches without entering (model/obstacles.py: plane, sphere, cylinder, box, mesh; mm),
         frictionless; each with its own name.
     self_contact: keep the hose out of itself (segments far enough apart along it).
+    contact_sides: per obstacle of `contact`, the side of it the hose is to end on (a world direction, unit) or
+        None for the side of least penetration (procedures/contact/bring_in.py); empty: None for every one.
+    contact_placement: "bring_in" (default: the published sequence without the obstacles, then each obstacle the
+        free hose touches brought in from a clear position) or "along_path" (the sequence with the obstacles
+        present all along; the straight start and the end fitting's path must clear them).
     """
 
     hose: Hose
@@ -48,6 +53,8 @@ class Problem:
     fittings: EndFittings | None = None
     contact: tuple[Obstacle, ...] = ()
     self_contact: bool = False
+    contact_sides: tuple[np.ndarray | None, ...] = ()
+    contact_placement: str = "bring_in"
 
     def __post_init__(self) -> None:
         g = np.asarray(self.gravity, dtype=float).reshape(-1)
@@ -80,6 +87,15 @@ class Problem:
             if name == "self" or name in names[:index]:
                 reason = "is reserved for self-contact" if name == "self" else "is used by an earlier obstacle"
                 raise ValueError(f"contact.obstacles[{index}].name = {name!r} {reason}: give each obstacle its own name")
+        sides = tuple(self.contact_sides) or (None,) * len(self.contact)
+        if len(sides) != len(self.contact):
+            raise ValueError(f"contact_sides: {len(sides)} given for {len(self.contact)} obstacles: give one per "
+                             "obstacle (None for the side of least penetration)")
+        object.__setattr__(self, "contact_sides", tuple(None if side is None else _side(side, obstacle)
+                                                        for side, obstacle in zip(sides, self.contact)))
+        if self.contact_placement not in CONTACT_PLACEMENTS:
+            raise ValueError(f"contact.placement = {self.contact_placement!r}: must be one of "
+                             f"{', '.join(repr(name) for name in CONTACT_PLACEMENTS)}")
         if not self.has_contact:
             return
         if self.hose.stiffeners is not None:
@@ -88,6 +104,10 @@ class Problem:
         if any(clip.slides for clip in self.clips):
             raise ValueError("[contact] with a sliding clip: not implemented yet (the hose's segments stretch next "
                              "to the clip); use a rotating clip at a chosen arc_length or remove the contact")
+
+    def side_of(self, name: str) -> np.ndarray | None:
+        """The hose_side given for the obstacle `name` (unit world direction), None if none."""
+        return dict(zip((obstacle.name for obstacle in self.contact), self.contact_sides)).get(name)
 
     def _check_fittings(self) -> None:
         """With fittings, start and end must be their outlets (a moved port needs its fittings moved too)."""
@@ -140,3 +160,15 @@ class Problem:
                 f"{label}: the {span:g} mm of hose from {from_label} cannot reach {distance:g} mm; move the clip "
                 "point or change its arc_length"
             )
+
+
+CONTACT_PLACEMENTS = ("bring_in", "along_path")
+
+
+def _side(side, obstacle: Obstacle) -> np.ndarray:
+    """A hose_side checked: a finite nonzero direction (made unit), not for a plane (whose side is its normal)."""
+    label = f"contact.obstacles {obstacle.name!r} hose_side"
+    if obstacle.kind == "plane":
+        raise ValueError(f"{label}: a plane keeps the hose on the side its normal points to; leave hose_side out "
+                         "(turn the normal to choose the side)")
+    return unit_vector(side, label)

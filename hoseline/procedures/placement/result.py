@@ -162,6 +162,8 @@ class Result:
     clips: the load of every clip on the hose (ClipReaction), in the order of problem.clips.
     contacts: with contact in the problem, one ObstacleContact per obstacle (in the order of
         problem.contact) and one named "self" with self-contact; empty without.
+    obstacle_placement: with obstacles brought in after the free placement (contact_placement "bring_in"), how
+        each came to its place (procedures/contact/bring_in.BroughtIn: the rule, the side, the travel); empty else.
     events: human-readable log of what happened along the continuation (bifurcations, branch switches).
     residual: final relative residual of the force and moment balance.
     """
@@ -202,6 +204,7 @@ class Result:
     discretisation_error: float | None = None
     clips: list[ClipReaction] = field(default_factory=list)
     contacts: list[ObstacleContact] = field(default_factory=list)
+    obstacle_placement: list = field(default_factory=list)
 
     @property
     def stable(self) -> bool:
@@ -220,7 +223,8 @@ class Result:
         if self.contacts:
             gaps = [contact.min_gap for contact in self.contacts if np.isfinite(contact.min_gap)]
             clips["contact"] = {"min_gap_mm": float(min(gaps)) if gaps else None,
-                                "obstacles": [contact.summary() for contact in self.contacts]}
+                                "obstacles": [contact.summary() for contact in self.contacts],
+                                "placement": [choice.summary() for choice in self.obstacle_placement]}
         clips |= fittings_summary(self.problem)
         return {
             "name": self.problem.name,
