@@ -130,13 +130,13 @@ def test_self_contact_is_reported_with_the_obstacles():
     assert result.summary()["contact"]["min_gap_mm"] == pytest.approx(drum.min_gap)
 
 
-def test_accuracy_refuses_contact_up_front_instead_of_blaming_the_half_segment_solve():
-    from hoseline.procedures.placement.continuation import PlacementError
+def test_accuracy_with_contact_refines_until_the_estimate_meets_it():
     from hoseline.procedures.placement.refinement import solve_to_accuracy
 
-    problem = problem_from_dict(with_contact({"obstacles": [DRUM]}))
-    with pytest.raises(PlacementError, match="does not take contact yet"):
-        solve_to_accuracy(problem, 0.01)
+    problem = problem_from_dict(with_contact({"obstacles": [DRUM]}))  # 50 segments: estimated 0.28 mm
+    result = solve_to_accuracy(problem, 0.05)
+    assert result.problem.hose.segments > 50 and result.discretisation_error <= 0.05
+    assert any(event.startswith("accuracy: with contact, estimated errors") for event in result.events)
 
 
 def test_an_end_mount_inside_an_obstacle_is_refused_naming_the_fitting():

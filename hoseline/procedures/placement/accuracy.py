@@ -6,11 +6,21 @@ and x_M of M = N/2 segments at the same clamps, Richardson extrapolation estimat
 of x_N as |x_M - x_N| / ((N/M)^2 - 1).  The coarse shape is solved by Newton from the fine
 one (the same branch, a few iterations), and compared at the fine stations through a cubic
 spline of its stations (interpolation error O(h^4), far below the estimate).
+
+With contact the order is one (docs/model.md, Contact: a touch-down or lift-off point falls between
+stations, and the reaction concentrated there is carried by the stations next to it), and the barrier
+adds an error that does not shrink with h: the hose rests a gap in (0, d_hat) off the obstacle, so
+the wrap or the lying part is displaced by that much (a hose pulled taut over a drum: +0.15 % of the
+push per micrometre).  contact_errors adds the two: the half-segment placement's difference (order 1)
+and twice the difference made by halving d_hat at the same segments (the gap is proportional to d_hat),
+for the stations, each obstacle's total force and the mounts' reactions.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from dataclasses import dataclass
+
 from scipy.interpolate import CubicSpline
 
 from hoseline.mechanics.clipped_newton import station_positions
@@ -18,6 +28,8 @@ from hoseline.mechanics.newton import RodProperties, node_positions, solve_equil
 from hoseline.mechanics.rod import Clamps, RodState
 
 CONVERGENCE_ORDER = 2
+CONTACT_ORDER = 1  # with contact (module doc)
+BARRIER_NARROWING = 0.5  # the error estimate's second barrier reach, a fraction of d_hat
 
 
 def coarse_segments(segments: int, minimum: int) -> int:
@@ -55,3 +67,63 @@ def richardson_error(fine: RodProperties, coarse: RodProperties, clamps: Clamps,
     difference = CubicSpline(s_coarse, coarse_nodes, axis=0)(s_fine) - fine_nodes
     ratio = (fine.segments / coarse.segments) ** CONVERGENCE_ORDER
     return float(np.max(np.linalg.norm(difference, axis=1))) / (ratio - 1.0)
+
+
+@dataclass(frozen=True)
+class ContactErrors:
+    """Estimated errors of a placement with contact: each the segment count's part (order 1) plus the barrier's.
+
+    station: largest station error, mm, of which station_barrier from the barrier's standoff (it does not shrink
+    with more segments).  reactions: the larger error of the two mounts' force vectors, N.  forces: per obstacle
+    name, the error of its total force vector, N.
+    """
+
+    station: float
+    station_barrier: float
+    reactions: float
+    forces: dict[str, float]
+
+    def describe(self) -> str:
+        """One line for the result's events."""
+        forces = ", ".join(f"{name!r} {error:.3g} N" for name, error in self.forces.items())
+        return (f"accuracy: with contact, estimated errors: stations {self.station:.3g} mm (of which the barrier's "
+                f"standoff {self.station_barrier:.3g} mm), mount reactions {self.reactions:.3g} N, total forces: "
+                f"{forces} (order 1 in the segment length plus the barrier's reach: docs/model.md, Contact)")
+
+
+@dataclass(frozen=True)
+class ContactSnapshot:
+    """What contact_errors compares of one equilibrium with contact.
+
+    s: (N+1,) arc length of the stations, mm.  centerline: (N+1, 3) the stations, mm.  reactions: (2, 3) the
+    start and end mounts' forces on the hose, N.  forces: per obstacle name, its total force on the hose (3,), N.
+    """
+
+    s: np.ndarray
+    centerline: np.ndarray
+    reactions: np.ndarray
+    forces: dict[str, np.ndarray]
+
+
+def snapshot(result) -> ContactSnapshot:
+    """The ContactSnapshot of a Result with contact."""
+    return ContactSnapshot(result.s, result.centerline, np.array([result.start_force, result.end_force]),
+                           {contact.name: contact.total_force for contact in result.contacts})
+
+
+def contact_errors(fine: ContactSnapshot, coarse: ContactSnapshot, narrowed: ContactSnapshot) -> ContactErrors:
+    """The ContactErrors of the equilibrium `fine` from `coarse`, the same problem placed with fewer segments, and
+    `narrowed`, the fine equilibrium solved again with the barrier's reach d_hat times BARRIER_NARROWING."""
+    segments = ((len(fine.s) - 1) / (len(coarse.s) - 1)) ** CONTACT_ORDER - 1.0
+    barrier = 1.0 / (1.0 - BARRIER_NARROWING)  # the error at d_hat from the change to BARRIER_NARROWING d_hat
+
+    def error(fine_value, coarse_value, narrowed_value):
+        return (float(np.linalg.norm(coarse_value - fine_value)) / segments
+                + barrier * float(np.linalg.norm(narrowed_value - fine_value)))
+
+    coarse_at_fine = CubicSpline(coarse.s, coarse.centerline, axis=0)(fine.s)
+    shape = float(np.max(np.linalg.norm(coarse_at_fine - fine.centerline, axis=1))) / segments
+    standoff = barrier * float(np.max(np.linalg.norm(narrowed.centerline - fine.centerline, axis=1)))
+    reactions = max(error(fine.reactions[k], coarse.reactions[k], narrowed.reactions[k]) for k in range(2))
+    forces = {name: error(force, coarse.forces[name], narrowed.forces[name]) for name, force in fine.forces.items()}
+    return ContactErrors(shape + standoff, standoff, reactions, forces)

@@ -7,11 +7,12 @@ from dataclasses import replace
 
 from hoseline.model.hose import MIN_SEGMENTS
 from hoseline.model.problem import Problem
+from hoseline.procedures.placement.accuracy import CONTACT_ORDER, CONVERGENCE_ORDER
 from hoseline.procedures.placement.continuation import PlacementError, Progress, StepControl
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.sequence import solve
 
-SAFETY = 1.2  # the count predicted from the order-2 error law, made this much larger
+SAFETY = 1.2  # the count predicted from the error law, made this much larger
 FEWEST_SEGMENTS = 10  # no fewer when the estimate asks for fewer: a coarse rod's estimate is itself rough
 MOST_SEGMENTS = 5000
 ROUNDS = 4
@@ -22,14 +23,13 @@ def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress |
     """Place the hose with a segment count whose estimated largest station error is at most `accuracy` (mm).
 
     Starts from the problem's segment count; each round predicts the count from the error law
-    (error ~ 1/N^2) and solves again, until the estimate meets the accuracy.  Raises PlacementError
+    (error ~ 1/N^2, with contact 1/N plus the barrier's standoff, which more segments do not remove: accuracy.py)
+    and solves again, until the estimate meets the accuracy.  Raises PlacementError
     when the error cannot be estimated or more than MOST_SEGMENTS would be needed.
     """
     if not (math.isfinite(accuracy) and accuracy > 0.0):
         raise ValueError(f"accuracy {accuracy!r} mm: give a positive number of mm")
-    if problem.has_contact:
-        raise PlacementError("--accuracy does not take contact yet (the error estimate's half-segment solve is not "
-                             "made with contact): give hose.segments instead")
+    order = CONTACT_ORDER if problem.has_contact else CONVERGENCE_ORDER  # of the error estimate (accuracy.py)
     step = clip_segment_step(problem)
     segments = _multiple(int(problem.hose.segments), step)
     tried: dict[int, Result] = {}
@@ -45,7 +45,7 @@ def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress |
             result.events.append(f"accuracy: {segments} segments, estimated station error {error:.3g} mm "
                                  f"<= {accuracy:g} mm asked for")
             return result
-        needed = math.ceil(segments * math.sqrt(error / accuracy) * SAFETY)
+        needed = math.ceil(segments * (error / accuracy) ** (1.0 / order) * SAFETY)
         if needed > MOST_SEGMENTS:
             raise PlacementError(f"an accuracy of {accuracy:g} mm needs about {needed} segments (estimated error "
                                  f"{error:.3g} mm at {segments}), more than {MOST_SEGMENTS}: ask for less accuracy")

@@ -54,7 +54,8 @@ from hoseline.procedures.placement.continuation import (
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.stiffening import phase_in_springs
 from hoseline.procedures.placement.stations import build_result
-from hoseline.procedures.placement.accuracy import coarse_segments, richardson_error
+from hoseline.procedures.placement.accuracy import (BARRIER_NARROWING, coarse_segments, contact_errors,
+                                                     richardson_error, snapshot)
 from hoseline.procedures.contact import placement as contact_placement
 from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
 from hoseline.procedures.contact.cushion import follow_on_cushion
@@ -252,8 +253,29 @@ def solve(
                 contact_placement.with_contact(other_result, props, other.clamps, other.state, sequence.contact)
                 for other_result, other in zip(result.alternatives, others)
             ]
-    if estimate_error and sequence.contact is not None:
-        result.events.append("accuracy: the discretisation error is not estimated with contact yet")
+    if estimate_error and sequence.contact is not None:  # accuracy.contact_errors: half the segments, half d_hat
+        coarse_count = coarse_segments(props.segments, MIN_SEGMENTS)
+        narrowed_model = sequence.contact.with_activation(BARRIER_NARROWING * sequence.contact.activation)
+        narrowed, narrowed_report = solve_with_contact(props, final, state, narrowed_model,
+                                                       tolerance=max(control.tolerance, CONTACT_TOLERANCE))
+        coarse = None
+        if coarse_count < props.segments and narrowed_report.converged:
+            try:
+                coarse = solve(replace(problem, hose=replace(problem.hose, segments=coarse_count)), control=control,
+                               estimate_error=False)
+            except PlacementError as error:
+                result.events.append(f"accuracy: the placement with {coarse_count} segments failed: {error}")
+        if coarse is None or _coarse_clamps(final, state, props.segments, coarse_count, props.length) is None:
+            result.events.append(f"accuracy: with contact, the discretisation error is not estimated (it needs the "
+                                 f"placement with {coarse_count} segments, every clip on one of its stations, and the "
+                                 "equilibrium with half the barrier's reach)")
+        else:
+            narrowed_result = contact_placement.with_contact(
+                build_result(problem, props, final, narrowed, lock_angle_deg, log, started, residual), props, final,
+                narrowed, narrowed_model)
+            errors = contact_errors(snapshot(result), snapshot(coarse), snapshot(narrowed_result))
+            result.discretisation_error = errors.station
+            result.events.append(errors.describe())
     elif estimate_error:
         coarse_count = coarse_segments(props.segments, MIN_SEGMENTS)
         coarse_final = _coarse_clamps(final, state, props.segments, coarse_count, props.length)
