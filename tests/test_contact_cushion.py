@@ -21,10 +21,11 @@ from hoseline.procedures.placement.sequence import solve
 STRUT_RADIUS = 15.0
 
 
-def strut_problem(sense: float):
+def strut_problem(sense: float, depth: float = 1.0, placement: str = "along_path"):
     """The issue's case (bench/bench_contact_placement.py --mesh) with the strut as a cylinder: the thesis hose (100
     segments, 180 deg), a fixed clip where the free hose passes station 50, self-contact, and a strut of radius
-    15 mm pressing 1 mm into the clipped shape at station 25 from the side -sense (t x d1)."""
+    15 mm pressing `depth` mm into the clipped shape at station 25, its axis on the side sense (t x d1) of it;
+    placement: the problem's contact_placement."""
     plain = demo_problem(180.0, segments=100)
     free = solve(plain, estimate_error=False)
     h = plain.hose.segment_length
@@ -33,10 +34,10 @@ def strut_problem(sense: float):
     tangent = placed.frames[24, 2] + placed.frames[25, 2]
     side = sense * np.cross(tangent, placed.frames[25, 0])
     side /= np.linalg.norm(side)
-    centre = placed.centerline[25] + side * (plain.hose.outer_radius + STRUT_RADIUS - 1.0)
+    centre = placed.centerline[25] + side * (plain.hose.outer_radius + STRUT_RADIUS - depth)
     axis = np.cross(tangent, side) / np.linalg.norm(np.cross(tangent, side))
     strut = Cylinder(centre - 100.0 * axis, centre + 100.0 * axis, STRUT_RADIUS, "strut")
-    return replace(clipped, contact=(strut,), self_contact=True, contact_placement="along_path")
+    return replace(clipped, contact=(strut,), self_contact=True, contact_placement=placement)
 
 
 @pytest.fixture(scope="module")

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -87,14 +87,29 @@ def spread_directions(count: int) -> np.ndarray:
     return np.column_stack([ring * np.cos(angle), ring * np.sin(angle), z])
 
 
-def candidate_sides(obstacle: Obstacle) -> np.ndarray:
-    """(k, 3) unit directions the hose may be pushed to by `obstacle` coming in along them."""
+def mounts_frame(clamps: Clamps) -> np.ndarray:
+    """(3, 3) rows: a frame carried with the mounts by a rigid motion of the problem (the start direction, the
+    chord to the end mount made perpendicular to it, their cross product), so that the candidate sides, and with
+    them the answer, move with the problem; the start fitting's frame where the chord is along the direction."""
+    tangent = clamps.start_frame[2]
+    chord = clamps.end_point - clamps.start_point
+    across = chord - (chord @ tangent) * tangent
+    if np.linalg.norm(across) <= 1e-9 * max(float(np.linalg.norm(chord)), 1.0):
+        return clamps.start_frame
+    across /= np.linalg.norm(across)
+    return np.array([tangent, across, np.cross(tangent, across)])
+
+
+def candidate_sides(obstacle: Obstacle, frame: np.ndarray) -> np.ndarray:
+    """(k, 3) unit directions the hose may be pushed to by `obstacle` coming in along them; frame: rows, the frame
+    the spread directions are laid out in (mounts_frame)."""
     if isinstance(obstacle, Plane):
         return obstacle.normal[None, :]
-    spread = spread_directions(SPREAD_DIRECTIONS)
+    spread = spread_directions(SPREAD_DIRECTIONS) @ frame
     if isinstance(obstacle, Cylinder):
         axis = (obstacle.end - obstacle.start) / np.linalg.norm(obstacle.end - obstacle.start)
-        u = np.cross(axis, np.eye(3)[int(np.argmin(np.abs(axis)))])
+        across = frame - np.outer(frame @ axis, axis)  # the frame's rows made perpendicular to the axis
+        u = across[int(np.argmax(np.linalg.norm(across, axis=1)))]
         u /= np.linalg.norm(u)
         v = np.cross(axis, u)
         angles = 2.0 * math.pi * np.arange(AROUND_AXIS) / AROUND_AXIS
@@ -130,14 +145,18 @@ def entry_travel(alone: ContactModel, obstacle: Obstacle, pieces: Sequence[np.nd
         return depth + clearance if depth > -clearance else -math.inf
     lowest = min(float(np.min(piece @ side)) for piece in pieces)
     s = reach_along(obstacle, side) - lowest + radius + 2.0 * clearance  # beyond it: separated by a slab
-    previous = s
     for _ in range(TRACE_STEPS):
-        gap = min(_gap(alone, piece + max(s, 0.0) * side) for piece in pieces)
-        if gap < clearance:
-            return previous  # the last position where it cleared the hose by the clearance
+        s = max(s, 0.0)
+        gap = min(_gap(alone, piece + s * side) for piece in pieces)
+        if gap < clearance:  # touched: back off by the shortfall (the gap grows by at most the move) until clear
+            for _ in range(TRACE_STEPS):
+                s += clearance - gap
+                gap = min(_gap(alone, piece + s * side) for piece in pieces)
+                if gap >= 0.5 * clearance:
+                    return s
+            return math.inf
         if s <= 0.0:
             return -math.inf  # at its place it clears the hose
-        previous = s
         s -= gap - 0.5 * clearance  # >= clearance / 2: the gap stays above clearance / 2 > 0
     return math.inf
 
@@ -169,6 +188,8 @@ def choose_entry(alone: ContactModel, obstacle: Obstacle, nodes: np.ndarray, hel
     its way misses every held piece; None if every way passes through one."""
     best = None
     for side in sides:
+        if best is not None and _gap(alone, nodes + best.travel * side) < 0.5 * START_CLEARANCE * alone.hose_radius:
+            continue  # it still touches the hose as far back as the best way starts: this way is no shorter
         travel = entry_travel(alone, obstacle, [nodes], side)
         if best is not None and travel >= best.travel:
             continue
@@ -235,7 +256,7 @@ def bring_in(
         _check_held_clear(alone, obstacle, held, clamps)
         if hint is not None:
             hint = np.asarray(hint, dtype=float) / np.linalg.norm(hint)
-            sides = candidate_sides(obstacle)
+            sides = candidate_sides(obstacle, mounts_frame(clamps))
             entry = choose_entry(alone, obstacle, nodes, held, np.vstack([hint, sides[sides @ hint >= HINT_COSINE]]))
             if entry is None:
                 raise PlacementError(
@@ -244,25 +265,31 @@ def bring_in(
                     "it: choose another hose_side for it, or leave hose_side out (the side of least penetration)")
             rule = "hose_side"
         else:
-            entry = choose_entry(alone, obstacle, nodes, held, candidate_sides(obstacle))
+            entry = choose_entry(alone, obstacle, nodes, held, candidate_sides(obstacle, mounts_frame(clamps)))
             if entry is None:
                 raise PlacementError(
                     f"placement with contact: obstacle {obstacle.name!r} cannot be brought to its place: the free "
                     "hose passes through it, and every way in passes through the hose where an end fitting or a clip "
                     "holds it. Move the obstacle or the mounts or clips, or give it a hose_side")
             rule = "least penetration"
+        # Moved relative to the hose: the mounts, clips and the obstacles already in place are carried by
+        # (1 - t) travel side and the entering obstacle stays (the weight is uniform, so only the relative position
+        # counts, and at t = 1 all is where it belongs); a mesh coming in is then never copied and refitted per step
         path_model = only(model, present + [j], self_contact=self_contact)
-        bodies = tuple(BRING_IN if k == j else None for k in range(len(model.names)))
+        bodies = tuple(BRING_IN if k in present else None for k in range(len(model.names)))
         moving = MovingObstacles(path_model, bodies)
         travel, side = entry.travel, entry.side
 
         def poses(t: float, travel=travel, side=side) -> dict[str, Pose]:
-            return {BRING_IN: Pose(np.eye(3), -(1.0 - t) * travel * side)}
+            return {BRING_IN: Pose(np.eye(3), (1.0 - t) * travel * side)}
+
+        def path(t: float, travel=travel, side=side) -> Clamps:
+            return shifted(clamps, (1.0 - t) * travel * side)
 
         phase = f"bring in {obstacle.name!r}"
         try:
-            state, _ = follow_contact(phase, lambda t: clamps, props, state, ObstaclePath(moving, poses),
-                                      control=control, log=log, progress=progress)
+            state, _ = follow_contact(phase, path, props, state, ObstaclePath(moving, poses), control=control,
+                                      log=log, progress=progress)
         except PlacementError as failure:
             raise PlacementError(
                 f"{failure} (obstacle {obstacle.name!r} was being moved in {travel:.4g} mm along "
@@ -283,6 +310,12 @@ def bring_in(
             f"(residual {report.residual:.2e}, {report.unstable_directions} unstable directions)"
             + hardest_push(props, clamps, state, model))
     return state, choices, report.residual
+
+
+def shifted(clamps: Clamps, move: np.ndarray) -> Clamps:
+    """`clamps` translated by `move` (mm): the mounts' and the clips' points."""
+    return replace(clamps, start_point=clamps.start_point + move, end_point=clamps.end_point + move,
+                   clips=tuple(replace(clip, point=clip.point + move) for clip in clamps.clips))
 
 
 def _check_held_clear(alone: ContactModel, obstacle: Obstacle, held: Sequence[np.ndarray], clamps: Clamps) -> None:

@@ -58,7 +58,9 @@ from hoseline.procedures.placement.accuracy import (BARRIER_NARROWING, coarse_se
                                                      richardson_error, snapshot)
 from hoseline.procedures.contact import placement as contact_placement
 from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
+from hoseline.procedures.contact.bring_in import BroughtIn, bring_in
 from hoseline.procedures.contact.cushion import follow_on_cushion
+from hoseline.mechanics.contact_motion import only
 from hoseline.mechanics.contact_newton import solve_with_contact
 from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, symmetric_images
 
@@ -236,6 +238,7 @@ def solve(
     result = build_result(problem, props, final, state, lock_angle_deg, log, started, residual)
     if sequence.contact is not None:
         result = contact_placement.with_contact(result, props, final, state, sequence.contact)
+        result.obstacle_placement = sequence.brought_in or []
     others = fork_branches(props, final, state, log.forks, sequence.finish)
     if sequence.contact is None:
         others += symmetric_images(problem, props, final, state, lock_angle_deg)  # with clips: those they allow
@@ -307,18 +310,24 @@ class _Sequence:
         self.locked_clips: tuple[ClipHold, ...] = ()
         self.lock_angle_deg = 0.0
         self.contact = contact_placement.problem_contact_model(problem) if problem.has_contact else None
+        # the model the sequence follows: with "bring_in" self-contact only (None without it), the obstacles
+        # brought in after the free placement (procedures/contact/bring_in.py); with "along_path" all of it
+        self.path_contact = self.contact
+        if self.contact is not None and problem.contact and problem.contact_placement == "bring_in":
+            self.path_contact = only(self.contact, [], self_contact=True) if problem.self_contact else None
+        self.brought_in: list[BroughtIn] | None = None  # how each obstacle came in, on the main run
 
     def clear_buckle(self, state: RodState, fraction: float, log: ContinuationLog) -> RodState:
         """With contact, the first buckled shape (of `state` and the other sides relaxed at the first step, at
         `fraction` of the place phase) that clears every obstacle, noted as an event when it is not `state`;
         `state` itself without contact."""
-        if self.contact is None or not log.forks:
+        if self.path_contact is None or not log.forks:
             return state
         clamps = self.path.place(fraction)
         for other in log.forks[-1].others:
-            if contact_placement.is_clear(self.props, clamps, state, self.contact):
+            if contact_placement.is_clear(self.props, clamps, state, self.path_contact):
                 break
-            if contact_placement.is_clear(self.props, clamps, other, self.contact):
+            if contact_placement.is_clear(self.props, clamps, other, self.path_contact):
                 log.events.append("place: with contact, kept the buckled side that clears the obstacles (the one of "
                                   "lowest energy enters one)")
                 return other
@@ -328,25 +337,25 @@ class _Sequence:
                 control: StepControl) -> RodState:
         """follow, or with contact follow_on_cushion (procedures/contact/cushion.py: the contact continuation on a
         wider barrier, narrowed to the model's at the end of the phase, before any roll is locked)."""
-        if self.contact is None:
+        if self.path_contact is None:
             return follow(phase, path, props, state, log, start=fraction, control=control, progress=self.progress)
-        return follow_on_cushion(phase, path, props, state, self.contact, start=fraction, control=control, log=log,
-                                 progress=self.progress)
+        return follow_on_cushion(phase, path, props, state, self.path_contact, start=fraction, control=control,
+                                 log=log, progress=self.progress)
 
     def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState):
         """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`."""
         problem, props, control = self.problem, self.props, self.control
         if phase == "place":
             place_path = self.path.place
-            if self.contact is not None:
+            if self.path_contact is not None:
                 contact_placement.check_clear("the straight hose the placement starts from", props, place_path(0.0),
                                               RodState(np.repeat(self.path.start_frame[None], props.segments, axis=0),
-                                                       np.zeros(3), 0.0), self.contact)
+                                                       np.zeros(3), 0.0), self.path_contact)
                 contact_placement.check_held_paths(place_path, [clip.arc_length for clip in problem.clips],
-                                                   self.contact)
+                                                   self.path_contact)
                 contact_placement.check_clear(f"the buckled hose at fraction {fraction:g} of the place phase (the first "
                                               "step, taken without contact)", props, place_path(fraction), state,
-                                              self.contact)
+                                              self.path_contact)
             state = self._follow("place", place_path, self.place_props, state, log, fraction, control)
             if props.springs is not None:
                 state = phase_in_springs(props, place_path(1.0), state, log, self.progress)
@@ -374,10 +383,10 @@ class _Sequence:
             )
             state = self._follow("twist", twist_path, props, state, log, fraction, twist_control)
         final = twist_path(1.0)
-        if self.contact is None:
+        if self.path_contact is None:
             state, report = solve_equilibrium(props, final, state, tolerance=control.tolerance)
         else:
-            state, report = solve_with_contact(props, final, state, self.contact,
+            state, report = solve_with_contact(props, final, state, self.path_contact,
                                                tolerance=max(control.tolerance, CONTACT_TOLERANCE))
         log.iterations += report.iterations
         if not report.converged or report.unstable_directions != 0:
@@ -387,6 +396,12 @@ class _Sequence:
             )
         if any(clip.sliding for clip in final.clips):
             final, state, report = _remesh_sliding(props, final, state, report, control.tolerance, log)
+        if self.path_contact is not self.contact:  # the obstacles brought in to the placed hose
+            state, brought_in, residual = bring_in(problem.contact, problem.contact_sides, props, final, state,
+                                                   self.contact, control=control, log=log, progress=self.progress)
+            if self.brought_in is None:
+                self.brought_in = brought_in
+            return final, state, lock_angle_deg, residual
         return final, state, lock_angle_deg, report.residual
 
 
