@@ -33,7 +33,7 @@ WEIGHTS = {"problem": 400, "iges": 220, "feasible": 150, "sweep": 60, "poses": 5
            "cloud": 50, "contact": 100}
 # about how long one input of each kind takes, s (to start the slow kinds first)
 SECONDS_PER_INPUT = {"problem": 0.05, "iges": 0.05, "feasible": 0.25, "sweep": 1.0, "poses": 1.4, "mesh": 0.4,
-                     "feasible_sweep": 3.0, "cloud": 0.6, "contact": 1.0}
+                     "feasible_sweep": 3.0, "cloud": 0.6, "contact": 0.15}
 EXAMPLES = 8  # error messages kept per kind and exit code
 OUTCOMES = ("exit 0", "exit 2", "exit 3", "exit 4") + FAILURES
 

@@ -12,15 +12,17 @@ Each kind of input starts from valid files and runs one command in-process:
     mesh            the same sweep, its obstacle mesh (STL, OBJ or PLY) mutated      -> hoseline sweep
     feasible_sweep  a random hose (up to 90 m long) and a random motion within reach -> hoseline sweep
     cloud           a problem and a synthetic scan (text or PLY), the scan mutated   -> hoseline compare
-    contact         a random problem with [contact]: self-contact and random planes, spheres, cylinders and
-                    boxes near the hose (the straight start may run through one: then a clear refusal);
+    contact         a random problem with [contact]: self-contact on or off and up to three planes, spheres,
+                    cylinders and boxes across its free shape or its straight start (clear of it, touching it
+                    or through it; some with a hose_side), or near the hose;
                     or the thesis problem with a [contact] table, mutated              -> hoseline solve
 
 The oracle (run_input) says what happened: exit 0, 2, 3 or 4 with nothing wrong, or one of
 FAILURES: an exception other than SystemExit (a traceback), another exit code, files left
-behind after a failure, an error without an "error:" line, a refused feasible input, or an
+behind after a failure, an error without an "error:" line, a refused feasible input, a refused
+contact layout whose message names no obstacle (nor the self-contact) or says nothing to change, or an
 exit-0 result that is not finite, converged, stable and of exact length, or (with contact) enters an
-obstacle or itself by more than CONTACT_TOLERANCE_MM.  Units: mm.
+obstacle or itself (a smallest gap below 0).  Units: mm.
 """
 
 from __future__ import annotations
@@ -47,7 +49,9 @@ from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
 KINDS = ("problem", "iges", "feasible", "sweep", "poses", "mesh", "feasible_sweep", "cloud", "contact")
 FAILURES = ("traceback", "hang", "exit_code", "partial_output", "unclear_error", "refused_valid", "bad_result")
 TIMEOUT_S = 60  # a run longer than this is a hang
-CONTACT_TOLERANCE_MM = 1e-3  # a converged result with contact may not enter anything deeper (issue 11)
+# a contact placement's refusal names an obstacle or the self-contact, and one of these says what to change
+SELF_CONTACT = re.compile(r"\bitself\b|self-contact|'self'", re.IGNORECASE)
+FIXES = ("move", "give", "remove", "shorten", "lengthen", "try", "choose", "use ", "change", "leave", "add")
 
 IGES_FILE = Path(__file__).parent.parent / "hoseline" / "data" / "mounts_thesis_appendix_a.igs"
 SWEEP_FILES = ("report.html", "view.png", "curves.png", "envelope.stl", "poses.csv", "shapes.csv", "sweep.json")
@@ -70,7 +74,9 @@ class FuzzInput:
 
     kind: one of KINDS.  files: name -> content.  args: the command line; an argument that
     names one of `files` becomes its path, "OUT" the output folder.  out: the output
-    folder's name in the fresh folder (may be too long, or under a file).
+    folder's name in the fresh folder (may be too long, or under a file).  obstacles: the names
+    of the contact obstacles of a problem whose placement without them succeeds: a solver failure
+    must then name one of them (or the hose's self-contact) and say what to change.
     """
 
     kind: str
@@ -78,6 +84,7 @@ class FuzzInput:
     args: list[str]
     out: str = "out"
     feasible: bool = False
+    obstacles: tuple[str, ...] = ()
 
 
 @dataclass
@@ -416,37 +423,111 @@ size = [20.0, 20.0, 20.0]
 """).encode()
 
 
+def _numbers(values) -> str:
+    return "[" + ", ".join(repr(float(x)) for x in values) + "]"
+
+
+def _across(direction: np.ndarray, other) -> np.ndarray:
+    """A unit vector perpendicular to the unit `direction`, towards `other` (any vector not along it)."""
+    across = np.cross(direction, np.asarray(other, dtype=float))
+    if np.linalg.norm(across) < 1e-6:
+        across = np.cross(direction, np.eye(3)[int(np.argmin(np.abs(direction)))])
+    return across / np.linalg.norm(across)
+
+
+def _free_centerline(data: dict) -> np.ndarray | None:
+    """The stations (mm) of the problem placed without contact, None if that placement fails."""
+    from hoseline.io.problem_file import problem_from_dict
+    from hoseline.procedures.placement.continuation import PlacementError
+    from hoseline.procedures.placement.sequence import solve
+
+    try:
+        return solve(problem_from_dict(data), estimate_error=False).centerline
+    except PlacementError:
+        return None
+
+
+@st.composite
+def contact_obstacle(draw, name: str, anchor: np.ndarray, length: float, radius: float, up: np.ndarray | None,
+                     mounts: tuple[np.ndarray, np.ndarray]) -> str:
+    """One [[contact.obstacles]] table whose surface passes `depth` mm beyond the hose point `anchor` (mm): clear of
+    it (depth < 0), touching it, a little or deeply into it; a plane under it (its normal `up`, against gravity, if
+    given) or any way up, a sphere, a cylinder or a box across it, with or without a hose_side.  Mostly sized and
+    placed to keep the `mounts` (points, mm) outside, so that most layouts are placed; sometimes not (a refusal)."""
+    kind = draw(st.sampled_from(("plane", "sphere", "cylinder", "box")))
+    side = np.array(draw(_unit_vectors()))
+    side /= np.linalg.norm(side)  # from the obstacle towards the hose: the side the hose is pushed to
+    if kind == "plane" and up is not None and draw(st.booleans()):
+        side = up
+    reach = draw(st.sampled_from(("clear", "touching", "shallow", "deep")))
+    depth = {"clear": -draw(st.floats(0.1, 2.0)) * radius, "touching": draw(st.floats(-0.01, 0.01)) * radius,
+             "shallow": draw(st.floats(0.0, 2.0)) * radius, "deep": draw(st.floats(0.0, 0.3)) * length}[reach]
+    size = draw(st.floats(0.02, 0.5)) * length + radius  # a radius or half an edge, mm
+    extents = [draw(st.floats(0.05, 1.0)) * length + radius for _ in range(2)]  # a cylinder's half-length, box edges
+    room = min(float(np.linalg.norm(mount - anchor)) for mount in mounts) - 3.0 * radius  # to the nearer mount
+    if draw(st.integers(0, 3)) > 0:  # keep the mounts outside: the obstacle within `room` of the anchor
+        if kind == "plane":
+            depth = min(depth, min(float((mount - anchor) @ side) for mount in mounts) - 1.5 * radius)
+        elif room > 0.1 * radius:
+            size = min(size, 0.4 * room)
+            depth = min(depth, size)
+            extents = [min(extent, 0.8 * room) for extent in extents]
+    table = f'[[contact.obstacles]]\nkind = "{kind}"\nname = "{name}"\n'
+    if kind == "plane":
+        return table + f"point = {_numbers(anchor + depth * side)}\nnormal = {_numbers(side)}\n"
+    centre = anchor - (size - depth) * side
+    if kind == "sphere":
+        table += f"center = {_numbers(centre)}\nradius = {size!r}\n"
+    elif kind == "cylinder":
+        axis = _across(side, draw(_unit_vectors()))
+        table += (f"start = {_numbers(centre - extents[0] * axis)}\nend = {_numbers(centre + extents[0] * axis)}\n"
+                  f"radius = {size!r}\n")
+    else:  # a block, one face towards the hose
+        across = _across(side, draw(_unit_vectors()))
+        table += (f"center = {_numbers(centre)}\nsize = {_numbers([2.0 * size, *extents])}\n"
+                  f"axes = [{_numbers(side)}, {_numbers(across)}, {_numbers(np.cross(side, across))}]\n")
+    hint = draw(st.sampled_from((None, None, "side", "opposite", "any")))
+    if hint is not None:
+        direction = {"side": side, "opposite": -side, "any": np.array(draw(_unit_vectors()))}[hint]
+        table += f"hose_side = {_numbers(direction)}\n"
+    return table
+
+
 @st.composite
 def contact_inputs(draw) -> FuzzInput:
-    """A random problem (at most 2 m, twists within two turns) with self-contact and obstacles near the middle of
-    the mounts, or the thesis problem with contact, mutated."""
-    if draw(st.booleans()):
+    """A random problem (at most 2 m, twists within two turns), self-contact on or off, and up to three obstacles
+    across its free shape (the problem placed without them), its straight start (along start.direction) or near the
+    middle of the mounts, clear of the hose, touching it or through it; or the thesis problem with contact, mutated.
+
+    The obstacles are named, and where the free placement succeeds a refusal must name one of them (or the hose's
+    self-contact) and say what to change (run_input)."""
+    if draw(st.integers(0, 3)) == 0:
         return FuzzInput("contact", {"problem.toml": draw(mutated(THESIS_WITH_CONTACT))},
                          ["solve", "problem.toml", "-o", "OUT", "-q"])
     data = draw(feasible_problem(largest_length=2000.0, largest_segments=16))
     data["end"]["twist"] = draw(st.floats(-720.0, 720.0))
     length, radius = data["hose"]["length"], 0.5 * data["hose"]["outer_diameter"]
-    middle = 0.5 * (np.array(data["start"]["point"]) + np.array(data["end"]["point"]))
-    lines = [f"[contact]\nself = {'true' if draw(st.booleans()) else 'false'}\n"]
-    for _ in range(draw(st.integers(0, 3))):
-        offset = draw(st.floats(0.05, 1.0)) * length * np.array(draw(_unit_vectors()))
-        centre = middle + offset
-        size = draw(st.floats(0.02, 0.5)) * length + radius
-        kind = draw(st.sampled_from(("plane", "sphere", "cylinder", "box")))
-        numbers = lambda v: "[" + ", ".join(repr(float(x)) for x in v) + "]"  # noqa: E731
-        table = f"[[contact.obstacles]]\nkind = \"{kind}\"\n"
-        if kind == "plane":  # the hose's side: the normal points from the plane towards the mounts' middle
-            table += f"point = {numbers(centre)}\nnormal = {numbers(-offset)}\n"
-        elif kind == "sphere":
-            table += f"center = {numbers(centre)}\nradius = {size!r}\n"
-        elif kind == "cylinder":
-            axis = np.array(draw(_unit_vectors()))
-            table += f"start = {numbers(centre - length * axis)}\nend = {numbers(centre + length * axis)}\nradius = {size!r}\n"
+    start, end = np.array(data["start"]["point"]), np.array(data["end"]["point"])
+    direction = np.array(data["start"]["direction"]) / np.linalg.norm(data["start"]["direction"])
+    gravity = np.array(data["environment"]["gravity"])
+    up = -gravity / np.linalg.norm(gravity) if np.any(gravity) else None
+    free = _free_centerline(data)
+    self_contact = draw(st.booleans())
+    lines = [f"[contact]\nself = {'true' if self_contact else 'false'}\n"]
+    names = []
+    for index in range(draw(st.integers(0 if self_contact else 1, 3))):
+        where = draw(st.sampled_from(("free shape", "free shape", "straight start", "near")))
+        if where == "free shape" and free is not None:
+            anchor = free[draw(st.integers(1, len(free) - 2))]
+        elif where == "near":
+            anchor = 0.5 * (start + end) + draw(st.floats(0.05, 1.0)) * length * np.array(draw(_unit_vectors()))
         else:
-            table += f"center = {numbers(centre)}\nsize = {numbers([size, 2.0 * size, 0.5 * size])}\n"
-        lines.append(table)
+            anchor = start + draw(st.floats(0.1, 1.0)) * length * direction
+        names.append(f"obstacle {index + 1}")
+        lines.append(draw(contact_obstacle(names[-1], anchor, length, radius, up, (start, end))))
     return FuzzInput("contact", {"problem.toml": toml_text(data, "\n".join(lines))},
-                     ["solve", "problem.toml", "-o", "OUT", "-q"])
+                     ["solve", "problem.toml", "-o", "OUT", "-q"],
+                     obstacles=tuple(names) if free is not None else ())
 
 
 STRATEGIES = {
@@ -513,11 +594,21 @@ def run_input(case: FuzzInput, folder: Path, timeout: int = 0) -> Outcome:
             outcome.failure, outcome.detail = "refused_valid", result.output[:500]
         elif result.exit_code == 3 and "the solver failed: " not in result.output:
             outcome.failure, outcome.detail = "unclear_error", result.output[:500]
+        elif result.exit_code == 3 and case.obstacles and not names_a_part_and_a_fix(result.output, case.obstacles):
+            outcome.failure, outcome.detail = "unclear_error", result.output[:500]
         return outcome
     problems = _check_outputs(case.args[0], out)
     if problems:
         outcome.failure, outcome.detail = "bad_result", "; ".join(problems)
     return outcome
+
+
+def names_a_part_and_a_fix(output: str, obstacles: tuple[str, ...]) -> bool:
+    """Whether a contact placement's refusal names one of `obstacles` (quoted) or the hose's self-contact, and says
+    what to change (one of FIXES)."""
+    text = " ".join(output.split())  # the message as one line, wherever the terminal wrapped it
+    named = any(f"'{name}'" in text for name in obstacles) or SELF_CONTACT.search(text) is not None
+    return named and any(word in text.lower() for word in FIXES)
 
 
 def _tree(folder: Path) -> set[Path]:
@@ -568,7 +659,7 @@ def check_result_json(path: Path) -> list[str]:
     hose = document["problem"]["hose"]
     problems = check_summary(document["summary"], hose["length"])
     gap = document["summary"].get("contact", {}).get("min_gap_mm")
-    if gap is not None and not gap >= -CONTACT_TOLERANCE_MM:
+    if gap is not None and not gap >= 0.0:  # the barrier keeps every gap positive: none may be negative
         problems.append(f"enters an obstacle or itself: smallest gap {gap} mm")
     stations = document["stations"]
     if any(v is None for name in stations for v in np.ravel(np.array(stations[name], dtype=object))):

@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 
 # examples per kind in `make test`: the sweeps and scans cost about a second each when they succeed
 SHORT_RUN = {"problem": 30, "iges": 20, "feasible": 10, "sweep": 6, "poses": 5, "mesh": 5, "feasible_sweep": 2,
-             "cloud": 5, "contact": 8}
+             "cloud": 5, "contact": 16}
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -31,10 +31,10 @@ def test_generated_inputs_never_break_the_command_line(kind, tmp_path_factory):
 
 
 def test_the_oracle_catches_what_it_must(tmp_path, monkeypatch):
-    """The oracle is not blind: a traceback, files left after a failure, a wrong result and a result inside an
-    obstacle are each caught."""
+    """The oracle is not blind: a traceback, files left after a failure, a wrong result, a result inside an
+    obstacle and a contact layout refused without naming the obstacle or what to change are each caught."""
     from cases import THESIS_TOML
-    from fuzz_cases import FuzzInput
+    from fuzz_cases import THESIS_WITH_CONTACT, FuzzInput
 
     from hoseline.io import results
     from hoseline.procedures.placement import sequence
@@ -79,3 +79,19 @@ def test_the_oracle_catches_what_it_must(tmp_path, monkeypatch):
         patch.setattr(results, "result_document", entering)
         outcome = run_input(case, fresh_folder(tmp_path, "entering"))
         assert outcome.failure == "bad_result" and "enters an obstacle" in outcome.detail
+
+    # a contact layout refused: the message must name an obstacle (or the self-contact) and say what to change
+    layout = FuzzInput("contact", {"problem.toml": THESIS_WITH_CONTACT}, ["solve", "problem.toml", "-o", "OUT", "-q"],
+                       obstacles=("plane", "box"))
+    for message, verdict in (("placement phase 'place' failed at fraction 0.45: iteration limit reached", "unclear_error"),
+                             ("the hose is inside obstacle 'box' at station 5", "unclear_error"),
+                             ("the hose is inside obstacle 'box' at station 5: move the obstacle", None),
+                             ("pressed hardest against 'self': try more segments", None)):
+
+        def refused(problem, **options):
+            raise sequence.PlacementError(message)
+
+        with monkeypatch.context() as patch:
+            patch.setattr(sequence, "solve", refused)
+            outcome = run_input(layout, fresh_folder(tmp_path, "refused"))
+            assert outcome.exit_code == 3 and outcome.failure == verdict, message

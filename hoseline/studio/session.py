@@ -330,12 +330,15 @@ class Session:
         """The problem of a problem-file dict, checked as a file is (StudioError with the file's message).
 
         The page never changes the contact obstacles: they are taken over from the problem shown, not
-        read again (a mesh obstacle's file would be read at every drag), and checked with the rest.
+        read again (a mesh obstacle's file would be read at every drag), with their hose_side hints and the
+        placement's way with them ([contact] placement), and checked with the rest.
         """
         edited = {key: value for key, value in data.items() if key != "contact"}
+        current = self.problem
         try:
             problem = problem_from_dict(edited, source="studio")
-            return replace(problem, contact=self.problem.contact, self_contact=self.problem.self_contact)
+            return replace(problem, contact=current.contact, self_contact=current.self_contact,
+                           contact_sides=current.contact_sides, contact_placement=current.contact_placement)
         except ProblemFileError as exc:
             raise StudioError(str(exc).removeprefix("studio: ")) from None
         except ValueError as exc:  # the Problem's own checks of contact with the rest (model/problem.py)
