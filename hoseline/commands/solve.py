@@ -155,12 +155,16 @@ def print_lengths(problem) -> None:
 
 
 def print_contacts(result) -> None:
-    """One line per obstacle of a placement with contact: length in contact (mm), total force (N), smallest gap (mm)."""
+    """One line per obstacle of a placement with contact: the total force (N), the length the hose lies on and its
+    distributed force, the point forces (N) at the touch-downs and point contacts (arc length, mm), the smallest gap."""
     for contact in result.contacts:
         what = "itself" if contact.name == "self" else f"{contact.name!r} ({contact.kind})"
-        Console().print(f"contact with {what}: {contact.length_in_contact:.1f} mm of hose at {contact.gap.size} "
-                        f"point(s), force {float(np.linalg.norm(contact.total_force)):.4g} N, smallest gap "
-                        f"{contact.min_gap:.3g} mm")
+        lying = [f"{arc.length:.1f} mm lying (s = {arc.start:.1f} to {arc.end:.1f} mm, "
+                 f"{float(np.linalg.norm(arc.distributed_force)):.4g} N spread)" for arc in contact.carried]
+        points = [f"{float(np.linalg.norm(t.force)):.4g} N at s = {t.arc_length:.1f} mm" for t in contact.touchdowns]
+        carried = "; ".join(lying + ([f"point force(s) {', '.join(points)}"] if points else [])) or "not touching"
+        Console().print(f"contact with {what}: force {float(np.linalg.norm(contact.total_force)):.4g} N, {carried}; "
+                        f"smallest gap {contact.min_gap:.3g} mm", soft_wrap=True)
 
 
 def print_exports(folder: Path, files) -> None:

@@ -3,9 +3,10 @@
 The placement sequence (procedures/placement/sequence.py) calls these when the problem has
 contact (Problem.contact or Problem.self_contact): the model of its obstacles, a check that the
 state the contact continuation starts from clears every obstacle (else a PlacementError naming
-the obstacle and what to do), and, on the converged shape, the contact points, forces and
-lengths per obstacle, the internal force with the contact loads, the stability margin with the
-barrier's Hessian, and a last check that nothing penetrates.
+the obstacle and what to do), and, on the converged shape, per obstacle the barrier's pairs and where
+the force is carried (the lying arcs, the touch-downs and their point forces: contact/extent.py), the
+internal force with the contact loads, the stability margin with the barrier's Hessian, and a last
+check that nothing penetrates.
 """
 
 from __future__ import annotations
@@ -19,11 +20,13 @@ import scipy.linalg
 
 from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.banded import NEUTRAL
+from hoseline.mechanics.clipped_newton import clip_forces
 from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_KINDS
 from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact, self_exclusion
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.model.problem import Problem
+from hoseline.procedures.contact.extent import carried_extent, free_hose
 from hoseline.procedures.contact.model import bend_length, contact_model, reference_pressure
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.result import ObstacleContact, Result
@@ -109,32 +112,59 @@ def _entered(model: ContactModel, nodes: np.ndarray) -> list[str]:
 
 def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState,
                     model: ContactModel) -> list[ObstacleContact]:
-    """One ObstacleContact per obstacle of the problem (and "self" with self-contact) at `state` (mm, N)."""
+    """One ObstacleContact per obstacle of the problem (and "self" with self-contact) at `state` (mm, N): its
+    barrier pairs, and where it carries its force (procedures/contact/extent.py)."""
     h = props.segment_length
     nodes = centerline(state.frames, clamps.start_point, h)
     a_kinds, a_first, a_second, _ = model.pairs(nodes, model.activation)
     forces, on_hose, on_other, active_gaps = model.terms(nodes, model.stiffness * h, a_kinds, a_first, a_second)[3:]
     active_owners = np.array([model.owner(kind, j) for kind, j in zip(a_kinds, a_second)], dtype=object)
-    arc = np.where(np.isin(a_kinds, STATION_KINDS), a_first * h,
+    at_station = np.isin(a_kinds, STATION_KINDS)
+    arc = np.where(at_station, a_first * h,
                    a_first * h + np.linalg.norm(on_hose - nodes[np.minimum(a_first, props.segments)], axis=1))
+    normal = on_hose - on_other  # from the obstacle's surface to the hose's centreline: its outward normal
+    normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-300)[:, None]
+    last_station = np.where(at_station, a_first, a_first + 1)  # a segment pair touches both its ends
+    beyond = _forces_beyond(props.segments, a_kinds, a_first, a_second, forces)
+    hose = free_hose(h, nodes, state.frames, clamps.start_frame[2],
+                     state.frames[-1, 2] if clamps.end_frame is None else clamps.end_frame[2],
+                     _internal_force(props, clamps, state) + beyond, clamps.line_weight, props.stiffness[:2])
     smallest = model.smallest_gaps(nodes)
     names = [obstacle.name for obstacle in problem.contact] + (["self"] if problem.self_contact else [])
     kind_of = {obstacle.name: obstacle.kind for obstacle in problem.contact} | {"self": "self"}
     reports = []
     for name in names:
-        mine = active_owners == name
-        at_stations = np.isin(a_kinds[mine], STATION_KINDS)  # a mesh touches stations and segments: count each once
-        touching = set(zip(at_stations.tolist(), a_first[mine].tolist()))
-        if name == "self":
-            touching |= set(zip(at_stations.tolist(), a_second[mine].tolist()))
-        order = np.argsort(arc[mine], kind="stable")
-        force = forces[mine][order]
+        mine = np.flatnonzero(active_owners == name)
+        mine = mine[np.argsort(arc[mine], kind="stable")]
+        force = forces[mine]
+        carried, touchdowns = carried_extent(hose, arc[mine], force, normal[mine], a_first[mine], last_station[mine])
         reports.append(ObstacleContact(
             name=name, kind=kind_of[name], min_gap=smallest[name],
-            arc_length=arc[mine][order], point=on_hose[mine][order], surface_point=on_other[mine][order],
-            gap=active_gaps[mine][order], force=force, total_force=force.sum(axis=0),
-            length_in_contact=h * len(touching)))
+            arc_length=arc[mine], point=on_hose[mine], surface_point=on_other[mine],
+            gap=active_gaps[mine], force=force, total_force=force.sum(axis=0),
+            length_in_contact=float(sum(part.length for part in carried)), carried=tuple(carried),
+            touchdowns=tuple(touchdowns)))
     return reports
+
+
+def _internal_force(props: RodProperties, clamps: Clamps, state: RodState) -> np.ndarray:
+    """(N+1, 3) N: the force of the part beyond each station on the part before it, without the contact loads:
+    the end mount's reaction, the weight and the clips beyond the station."""
+    s = props.segment_length * np.arange(props.segments + 1)
+    force = state.end_force[None, :] + (props.length - s)[:, None] * clamps.line_weight[None, :]
+    for clip, push in zip(clamps.clips, clip_forces(clamps, state)):
+        force[:clip.node] += push
+    return force
+
+
+def _forces_beyond(segments: int, kinds, first, second, forces) -> np.ndarray:
+    """(N+1, 3) N: the sum of the contact forces (of the pairs kinds, first, second) on the part of the hose
+    beyond each station (see contact_forces_beyond)."""
+    acting = np.zeros((segments + 2, 3))  # at index m: the forces that act beyond the stations before m
+    np.add.at(acting, np.where(np.isin(kinds, STATION_KINDS), first, first + 1), forces)
+    self_pairs = kinds == SEGMENT_SEGMENT
+    np.add.at(acting, second[self_pairs] + 1, -forces[self_pairs])
+    return np.cumsum(acting[::-1], axis=0)[::-1][1:]
 
 
 def contact_forces_beyond(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> np.ndarray:
@@ -147,13 +177,7 @@ def contact_forces_beyond(props: RodProperties, clamps: Clamps, state: RodState,
     nodes = centerline(state.frames, clamps.start_point, h)
     kinds, first, second, _ = model.pairs(nodes, model.activation)
     forces = model.terms(nodes, model.stiffness * h, kinds, first, second)[3]
-    beyond = np.zeros((props.segments + 1, 3))
-    stations = np.arange(props.segments + 1)
-    for kind, i, j, force in zip(kinds, first, second, forces):
-        beyond[stations < i if kind in STATION_KINDS else stations <= i] += force
-        if kind == SEGMENT_SEGMENT:
-            beyond[stations <= j] -= force
-    return beyond
+    return _forces_beyond(props.segments, kinds, first, second, forces)
 
 
 def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:

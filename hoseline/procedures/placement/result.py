@@ -83,18 +83,56 @@ class ClipReaction:
 
 
 @dataclass(frozen=True)
+class Touchdown:
+    """A concentrated push of an obstacle on the hose: at a touch-down (lift-off) point, where the hose
+    starts or stops lying on it, or the whole push of a contact too short to lie (a point contact).
+    arc_length: mm from the start fitting.  point: (3,) mm on the centreline.  force: (3,) N, on the hose."""
+
+    arc_length: float
+    point: np.ndarray
+    force: np.ndarray
+
+    def summary(self) -> dict:
+        """For result.json (user units)."""
+        return {"arc_length_mm": self.arc_length, "point_mm": self.point.tolist(), "force_N": self.force.tolist()}
+
+
+@dataclass(frozen=True)
+class CarriedArc:
+    """An arc on which the hose lies on an obstacle: from `start` to `end`, mm of arc length; the obstacle
+    pushes the distributed force `distributed_force` (3,) N over it (in all, between its touch-downs)."""
+
+    start: float
+    end: float
+    distributed_force: np.ndarray
+
+    @property
+    def length(self) -> float:
+        """mm."""
+        return self.end - self.start
+
+    def summary(self) -> dict:
+        """For result.json (user units)."""
+        return {"start_mm": self.start, "end_mm": self.end, "length_mm": self.length,
+                "distributed_force_N": self.distributed_force.tolist()}
+
+
+@dataclass(frozen=True)
 class ObstacleContact:
     """Where and how hard the hose presses on one obstacle (or on itself, name "self") at equilibrium.
 
     name, kind: as in the problem ("plane", "sphere", "cylinder", "box", "mesh"; "self" for self-contact).
     min_gap: smallest gap between the hose surface and the obstacle, mm (>= 0; inf if never near).
-    One row per contact pair (gap below the barrier's activation distance, see docs/model.md Contact):
-    arc_length (k,) mm of the hose point from the start fitting; point (k, 3) mm on the hose's
-    centreline; surface_point (k, 3) mm on the obstacle's surface; gap (k,) mm; force (k, 3) N, the
-    obstacle's push on the hose (for self-contact, on the first pass: the second gets its opposite).
-    total_force: (3,) N, the sum.  length_in_contact: mm, h times the stations (plane; a box's or
-    mesh's faces) and segments (round obstacles; a box's or mesh's edges) touching (a count at the
-    resolution of the stations, see docs/model.md Contact).
+    The barrier's pairs, one row per pair with a gap below the barrier's activation distance d_hat (the
+    barrier's reach, which spreads a touch-down's point force over the stations next to it, see
+    docs/model.md Contact): arc_length (k,) mm of the hose point from the start fitting; point (k, 3) mm on
+    the hose's centreline; surface_point (k, 3) mm on the obstacle's surface; gap (k,) mm; force (k, 3) N,
+    the obstacle's push on the hose (for self-contact, on the first pass: the second gets its opposite).
+    total_force: (3,) N, the sum.
+    Where the force is carried (procedures/contact/extent.py): carried, the arcs the hose lies on it
+    (CarriedArc: ends, distributed force); touchdowns, the point forces at their ends and those of point
+    contacts (Touchdown: arc length, point, force); the distributed and the point forces sum to total_force.
+    length_in_contact: mm, the length of the carried arcs (0 for point contacts only).
     """
 
     name: str
@@ -107,12 +145,16 @@ class ObstacleContact:
     force: np.ndarray
     total_force: np.ndarray
     length_in_contact: float
+    carried: tuple[CarriedArc, ...] = ()
+    touchdowns: tuple[Touchdown, ...] = ()
 
     def summary(self) -> dict:
-        """For result.json (user units)."""
+        """For result.json (user units); "points" are the barrier's pairs."""
         return {"name": self.name, "kind": self.kind,
                 "min_gap_mm": None if not np.isfinite(self.min_gap) else float(self.min_gap),
                 "total_force_N": self.total_force.tolist(), "length_in_contact_mm": float(self.length_in_contact),
+                "carried_arcs": [arc.summary() for arc in self.carried],
+                "touchdowns": [touchdown.summary() for touchdown in self.touchdowns],
                 "points": [{"arc_length_mm": float(s), "point_mm": p.tolist(), "surface_point_mm": q.tolist(),
                             "gap_mm": float(g), "force_N": f.tolist()}
                            for s, p, q, g, f in zip(self.arc_length, self.point, self.surface_point, self.gap, self.force)]}

@@ -47,8 +47,8 @@ class SweepContact:
 
     name, kind: as in the problem ("plane", "sphere", "cylinder"; "self").  min_gap: (M,) mm, the smallest
     gap between the hose surface and the obstacle (>= 0; inf if never near).  total_force: (M, 3) N, the
-    obstacle's push on the hose.  length_in_contact: (M,) mm, at the resolution of the stations (see
-    placement/result.ObstacleContact).  points, forces: per pose, the contact points on the hose's
+    obstacle's push on the hose.  length_in_contact: (M,) mm, the length the hose lies on it (0 for a contact
+    at a point; see placement/result.ObstacleContact).  points, forces: per pose, the contact points on the hose's
     centreline (k, 3) mm and the size of the push at each (k,) N (k may differ from pose to pose).
     """
 

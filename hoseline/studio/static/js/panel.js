@@ -182,9 +182,9 @@ export class Panel {
     rows.push(['start reaction', [vector(r.start_force, 'N'), vector(r.start_moment, 'N·mm')], null]);
     rows.push(['end reaction', [vector(r.end_force, 'N'), vector(r.end_moment, 'N·mm')], null]);
     for (const c of r.contacts) {
-      const touching = c.length_in_contact > 0;
+      const touching = c.total_force.some((v) => v !== 0);  // a point contact lies on no length
       rows.push([`contact with ${c.name}`, touching
-        ? [vector(c.total_force, 'N'), `over ${fmt(c.length_in_contact)} mm, least gap ${fmt(c.min_gap, 4)} mm`]
+        ? [vector(c.total_force, 'N'), `${c.length_in_contact > 0 ? `lying on ${fmt(c.length_in_contact)} mm` : 'at a point'}, least gap ${fmt(c.min_gap, 4)} mm`]
         : `not touching (least gap ${c.min_gap === null ? 'far' : `${fmt(c.min_gap)} mm`})`, null]);
     }
     state.clips.forEach((clip, k) => rows.push([`clip ${clip.name || k + 1} (${clip.kind})`,
