@@ -671,8 +671,9 @@ def test_a_straight_start_through_a_mesh_is_refused_naming_it(tmp_path):
     # a thin plate across the straight hose (from the start along x): no station inside it, a segment through it
     write_stl(tmp_path / "plate.stl", np.array([[103.0, -50.0, -50.0], [103.0, 50.0, -50.0], [103.0, 0.0, 50.0]]),
               np.array([[0, 1, 2]]))
-    problem = problem_from_dict(BOX_BASE | {"contact": {"obstacles": [{"kind": "mesh", "file": "plate.stl",
-                                                                      "name": "plate"}]}}, "p.toml", tmp_path)
+    problem = problem_from_dict(BOX_BASE | {"contact": {"placement": "along_path",
+                                                        "obstacles": [{"kind": "mesh", "file": "plate.stl",
+                                                                       "name": "plate"}]}}, "p.toml", tmp_path)
     with pytest.raises(PlacementError) as error:
         solve(problem, estimate_error=False)
     assert "'plate'" in str(error.value) and "straight hose" in str(error.value) and "segment" in str(error.value)

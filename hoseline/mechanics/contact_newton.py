@@ -477,6 +477,9 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
         if system.residual <= tolerance:
             if unstable > 0 and _lowest_mode(system)[0] >= -NEUTRAL:
                 unstable = 0  # the pivots counted an eigenvalue that is zero to rounding (see NEUTRAL_MODE)
+            elif unstable < 0:  # an impossible count (fewer negative pivots than constraints): rounding in a KKT
+                # matrix with the barrier's stiff rows next to a nearly taut span; the eigenvalues decide
+                unstable = 0 if _lowest_mode(system)[0] >= -NEUTRAL else 1
             return state, NewtonReport(True, iteration, system.residual, unstable)
         if iteration == max_iterations:
             break

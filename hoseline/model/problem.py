@@ -37,7 +37,8 @@ class Problem:
         frictionless; each with its own name.
     self_contact: keep the hose out of itself (segments far enough apart along it).
     contact_sides: per obstacle of `contact`, the side of it the hose is to end on (a world direction, unit) or
-        None for the side of least penetration (procedures/contact/bring_in.py); empty: None for every one.
+        None for the side of least penetration (procedures/contact/bring_in.py); empty (as kept when every one is
+        None): None for every one.
     contact_placement: "bring_in" (default: the published sequence without the obstacles, then each obstacle the
         free hose touches brought in from a clear position) or "along_path" (the sequence with the obstacles
         present all along; the straight start and the end fitting's path must clear them).
@@ -91,8 +92,9 @@ class Problem:
         if len(sides) != len(self.contact):
             raise ValueError(f"contact_sides: {len(sides)} given for {len(self.contact)} obstacles: give one per "
                              "obstacle (None for the side of least penetration)")
-        object.__setattr__(self, "contact_sides", tuple(None if side is None else _side(side, obstacle)
-                                                        for side, obstacle in zip(sides, self.contact)))
+        sides = tuple(None if side is None else _side(side, obstacle) for side, obstacle in zip(sides, self.contact))
+        # none given: kept empty, so that a copy with other obstacles (dataclasses.replace) needs no new list
+        object.__setattr__(self, "contact_sides", () if all(side is None for side in sides) else sides)
         if self.contact_placement not in CONTACT_PLACEMENTS:
             raise ValueError(f"contact.placement = {self.contact_placement!r}: must be one of "
                              f"{', '.join(repr(name) for name in CONTACT_PLACEMENTS)}")

@@ -118,8 +118,7 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
         with compiling("contact"):
             solve(CONTACT_PLACEMENT, estimate_error=False)
             # without the sheet, its meshes are small: their searches walk the trees in one call (walked_mesh_pairs)
-            small = problem_contact_model(replace(CONTACT_PLACEMENT, contact=CONTACT_PLACEMENT.contact[:-1],
-                                                  contact_sides=()))
+            small = problem_contact_model(replace(CONTACT_PLACEMENT, contact=CONTACT_PLACEMENT.contact[:-1]))
             small.pairs(np.linspace([0.0, 0.0, 100.0], [150.0, 0.0, 100.0], 17), small.activation)
             model = problem_contact_model(CONTACT_PLACEMENT)  # a sweep's obstacles moved with their bodies
             moved_model(model, [Pose(position=np.array([1.0, 0.0, 0.0]))] * len(model.names))

@@ -21,7 +21,7 @@ itself, that has the shortest way in), the side is that of least penetration: am
 plane: its normal; a sphere: 64 directions spread over the sphere; a cylinder: 32 directions about
 its axis and the 64; a box: the 64 and its six face normals; a mesh: the 64), the one along which the
 obstacle has the shortest way to come in from where it clears the hose, and whose way does not pass
-through a held part of the hose (the segments at the end fittings and at clips, which cannot move
+through a held point of the hose (the stations at the end fittings and at clips, which cannot move
 aside).  The travel along a direction is found by sphere tracing: from a position where the obstacle
 clears the hose by a slab, it is stepped towards its place by the smallest gap (a step shorter than
 every gap cannot reach the hose) until it touches; then it is set back by a clearance (START_CLEARANCE
@@ -52,6 +52,7 @@ AROUND_AXIS = 32  # more candidates about a cylinder's axis (perpendicular to it
 TRACE_STEPS = 2000  # of one sphere trace: a trace that has not met the hose by then (grazing it) is given up
 SMALLEST_TRACE_STEP = 0.02  # hose radii: the check of a held piece's way steps at least this far
 HINT_COSINE = math.cos(math.radians(45.0))  # a hose_side is met by the shortest way in within 45 degrees of it
+MOST_WAYS = 4  # ways in tried per obstacle (each at least 45 degrees from the ways that failed) before it is refused
 BRING_IN = "bringing in"  # the body name of the obstacle being brought in (the others are fixed)
 
 
@@ -63,6 +64,8 @@ class BroughtIn:
     (the side chosen) or "hose_side" (the side the problem names).  hose_side: (3,) unit world direction, the
     side of the obstacle the hose is pushed to (the obstacle moved in along it); None when clear.  travel: mm,
     how far it was moved in.  free_gap: mm, the smallest gap of the free equilibrium to it (negative: inside).
+    ways_failed: the shorter ways in (sides at least 45 degrees apart) along which the hose could not be pushed and
+    that were given up for this one (a hose too short to pass round the obstacle that way, or pinched).
     """
 
     name: str
@@ -70,12 +73,13 @@ class BroughtIn:
     hose_side: np.ndarray | None
     travel: float
     free_gap: float
+    ways_failed: int = 0
 
     def summary(self) -> dict:
         """For result.json (mm)."""
         return {"name": self.name, "rule": self.rule,
                 "hose_side": None if self.hose_side is None else self.hose_side.tolist(),
-                "travel_mm": float(self.travel), "free_gap_mm": float(self.free_gap)}
+                "travel_mm": float(self.travel), "free_gap_mm": float(self.free_gap), "ways_failed": self.ways_failed}
 
 
 def spread_directions(count: int) -> np.ndarray:
@@ -162,18 +166,23 @@ def entry_travel(alone: ContactModel, obstacle: Obstacle, pieces: Sequence[np.nd
 
 
 def _gap(alone: ContactModel, nodes: np.ndarray) -> float:
-    """The smallest gap (mm) of the capsules of the hose radius along `nodes` (mm) to the one obstacle of `alone`."""
-    return float(min(alone.smallest_gaps(nodes).values()))
+    """The smallest gap (mm) of the capsules of the hose radius along `nodes` (mm) to the one obstacle of `alone`.
+
+    The first node is counted against planes too (the solver's station-plane pairs leave out station 0, the clamped
+    start point)."""
+    first = (nodes[0] - alone.planes[:, :3]) @ alone.planes[:, 3:].T if alone.planes.size else np.zeros((0, 0))
+    return float(min([*alone.smallest_gaps(nodes).values(), *(np.diagonal(first) - alone.hose_radius)]))
 
 
-def held_pieces(props: RodProperties, clamps: Clamps, nodes: np.ndarray) -> list[np.ndarray]:
-    """The parts of the hose a moving obstacle cannot push aside (mm): the segments at each end fitting and at
-    every clip (a clip that holds the direction: both segments at it; a ball clip: its station)."""
-    pieces = [nodes[:2], nodes[-2:]]
-    for clip in clamps.clips:
-        k = clip.node
-        pieces.append(nodes[max(k - 1, 0):k + 2] if clip.frame is not None else nodes[k:k + 1].repeat(2, axis=0))
-    return pieces
+HELD_STUB = 1e-3  # hose radii: a held point is measured as a stub this long along the hose (the gaps need a segment)
+
+
+def held_pieces(clamps: Clamps, radius: float) -> list[np.ndarray]:
+    """The points of the hose a moving obstacle cannot push aside, each as a stub of HELD_STUB along the hose (mm):
+    the end fittings' and the clips' (the segments next to them turn about the joints there, so they are not held)."""
+    held = [(clamps.start_point, clamps.start_frame[2]), (clamps.end_point, clamps.end_frame[2])]
+    held += [(clip.point, np.eye(3)[2] if clip.frame is None else clip.frame[2]) for clip in clamps.clips]
+    return [np.array([point, point + HELD_STUB * radius * tangent]) for point, tangent in held]
 
 
 @dataclass(frozen=True)
@@ -183,11 +192,15 @@ class _Entry:
 
 
 def choose_entry(alone: ContactModel, obstacle: Obstacle, nodes: np.ndarray, held: Sequence[np.ndarray],
-                 sides: np.ndarray) -> _Entry | None:
+                 sides: np.ndarray, avoid: Sequence[np.ndarray] = ()) -> _Entry | None:
     """The side (of `sides`) along which `obstacle` comes in the shortest way to clear the hose `nodes` (mm) while
-    its way misses every held piece; None if every way passes through one."""
+    its way misses every held piece, leaving out the sides within 45 degrees of those in `avoid` (ways that failed);
+    None if there is none."""
     best = None
-    for side in sides:
+    ordered = sides[np.argsort(-(sides @ _likely_side(obstacle, nodes, alone.hose_radius)), kind="stable")]
+    for side in ordered:
+        if any(side @ other >= HINT_COSINE for other in avoid):
+            continue
         if best is not None and _gap(alone, nodes + best.travel * side) < 0.5 * START_CLEARANCE * alone.hose_radius:
             continue  # it still touches the hose as far back as the best way starts: this way is no shorter
         travel = entry_travel(alone, obstacle, [nodes], side)
@@ -197,6 +210,25 @@ def choose_entry(alone: ContactModel, obstacle: Obstacle, nodes: np.ndarray, hel
             continue
         best = _Entry(side, travel)
     return best
+
+
+def _likely_side(obstacle: Obstacle, nodes: np.ndarray, radius: float) -> np.ndarray:
+    """A guess of the side of least penetration, to try first (then most other sides are ruled out by one gap each):
+    from the obstacle's middle to the middle of the stations (mm) within its bounding box widened by `radius`."""
+    if isinstance(obstacle, Plane):
+        return obstacle.normal
+    if isinstance(obstacle, Sphere):
+        corners = np.array([obstacle.centre - obstacle.radius, obstacle.centre + obstacle.radius])
+    elif isinstance(obstacle, Cylinder):
+        ends = np.array([obstacle.start, obstacle.end])
+        corners = np.array([ends.min(axis=0) - obstacle.radius, ends.max(axis=0) + obstacle.radius])
+    else:
+        vertices = obstacle.triangles()[0]
+        corners = np.array([vertices.min(axis=0), vertices.max(axis=0)])
+    near = np.all((nodes >= corners[0] - radius) & (nodes <= corners[1] + radius), axis=1)
+    towards = (nodes[near] if np.any(near) else nodes).mean(axis=0) - corners.mean(axis=0)
+    length = float(np.linalg.norm(towards))
+    return towards / length if length > 0.0 else np.zeros(3)
 
 
 def _passes_through(alone: ContactModel, obstacle: Obstacle, held: Sequence[np.ndarray], side: np.ndarray,
@@ -238,68 +270,51 @@ def bring_in(
 
     obstacles: the problem's (model.names in order).  sides: per obstacle, the side the hose is to end on (a world
     direction) or None (least penetration).  Raises PlacementError naming the obstacle when a held part of the hose
-    (an end fitting's or a clip's segment) is inside it, when every way in passes through a held part, or when its
+    (an end fitting's or a clip's station) is inside it, when every way in passes through a held part, or when its
     continuation cannot go on (saying where the hose is pressed hardest)."""
     h = props.segment_length
     present: list[int] = []
     choices: list[BroughtIn] = []
-    self_contact = model.self_exclusion >= 0
     for j, (obstacle, hint) in enumerate(zip(obstacles, sides)):
         alone = only(model, [j], self_contact=False)
         nodes = centerline(state.frames, clamps.start_point, h)
-        held = held_pieces(props, clamps, nodes)
+        held = held_pieces(clamps, model.hose_radius)
         free_gap = _gap(alone, nodes)
         if free_gap > 2.0 * model.activation:
             choices.append(BroughtIn(obstacle.name, "clear", None, 0.0, free_gap))
             present.append(j)
             continue
         _check_held_clear(alone, obstacle, held, clamps)
+        sides_of = candidate_sides(obstacle, mounts_frame(clamps))
+        rule = "least penetration" if hint is None else "hose_side"
         if hint is not None:
             hint = np.asarray(hint, dtype=float) / np.linalg.norm(hint)
-            sides = candidate_sides(obstacle, mounts_frame(clamps))
-            entry = choose_entry(alone, obstacle, nodes, held, np.vstack([hint, sides[sides @ hint >= HINT_COSINE]]))
+            sides_of = np.vstack([hint, sides_of[sides_of @ hint >= HINT_COSINE]])
+        failed: list[tuple[np.ndarray, str]] = []  # (side, why) of ways in that the hose could not be pushed along
+        while len(failed) < MOST_WAYS:
+            entry = choose_entry(alone, obstacle, nodes, held, sides_of, [side for side, _ in failed])
             if entry is None:
-                raise PlacementError(
-                    f"placement with contact: obstacle {obstacle.name!r} brought in towards hose_side "
-                    f"{np.round(hint, 4).tolist()} would pass through the hose where an end fitting or a clip holds "
-                    "it: choose another hose_side for it, or leave hose_side out (the side of least penetration)")
-            rule = "hose_side"
+                break
+            try:
+                state = _carried_in(j, present, entry, props, clamps, state, model, control, log, progress)
+                break
+            except PlacementError as failure:
+                failed.append((entry.side, str(failure)))
+                if log is not None:
+                    log.events.append(f"bring in {obstacle.name!r}: along {np.round(entry.side, 4).tolist()} "
+                                      f"({entry.travel:.4g} mm) the hose could not be pushed ({failure}); another "
+                                      "side is tried")
         else:
-            entry = choose_entry(alone, obstacle, nodes, held, candidate_sides(obstacle, mounts_frame(clamps)))
-            if entry is None:
-                raise PlacementError(
-                    f"placement with contact: obstacle {obstacle.name!r} cannot be brought to its place: the free "
-                    "hose passes through it, and every way in passes through the hose where an end fitting or a clip "
-                    "holds it. Move the obstacle or the mounts or clips, or give it a hose_side")
-            rule = "least penetration"
-        # Moved relative to the hose: the mounts, clips and the obstacles already in place are carried by
-        # (1 - t) travel side and the entering obstacle stays (the weight is uniform, so only the relative position
-        # counts, and at t = 1 all is where it belongs); a mesh coming in is then never copied and refitted per step
-        path_model = only(model, present + [j], self_contact=self_contact)
-        bodies = tuple(BRING_IN if k in present else None for k in range(len(model.names)))
-        moving = MovingObstacles(path_model, bodies)
-        travel, side = entry.travel, entry.side
-
-        def poses(t: float, travel=travel, side=side) -> dict[str, Pose]:
-            return {BRING_IN: Pose(np.eye(3), (1.0 - t) * travel * side)}
-
-        def path(t: float, travel=travel, side=side) -> Clamps:
-            return shifted(clamps, (1.0 - t) * travel * side)
-
+            entry = None
+        if entry is None:
+            raise PlacementError(_no_way_in(obstacle.name, hint, failed))
+        side, travel = entry.side, entry.travel
         phase = f"bring in {obstacle.name!r}"
-        try:
-            state, _ = follow_contact(phase, path, props, state, ObstaclePath(moving, poses), control=control,
-                                      log=log, progress=progress)
-        except PlacementError as failure:
-            raise PlacementError(
-                f"{failure} (obstacle {obstacle.name!r} was being moved in {travel:.4g} mm along "
-                f"{np.round(side, 4).tolist()}, the side of {rule}, after the placement without it: the hose cannot "
-                "be pushed there; give it another hose_side, or move it or the mounts)") from None
         if log is not None:
             log.events.append(f"{phase}: the free hose {'enters' if free_gap < 0 else 'touches'} it (gap "
                               f"{free_gap:.4g} mm); moved in {travel:.4g} mm along {np.round(side, 4).tolist()} "
                               f"({rule}), the hose pushed to that side")
-        choices.append(BroughtIn(obstacle.name, rule, side, travel, free_gap))
+        choices.append(BroughtIn(obstacle.name, rule, side, travel, free_gap, len(failed)))
         present.append(j)
     state, report = solve_with_contact(props, clamps, state, model, tolerance=max(control.tolerance, CONTACT_TOLERANCE))
     if log is not None:
@@ -310,6 +325,51 @@ def bring_in(
             f"(residual {report.residual:.2e}, {report.unstable_directions} unstable directions)"
             + hardest_push(props, clamps, state, model))
     return state, choices, report.residual
+
+
+def _carried_in(j: int, present: list[int], entry: _Entry, props: RodProperties, clamps: Clamps, state: RodState,
+                model: ContactModel, control: StepControl, log: ContinuationLog | None,
+                progress: Progress | None) -> RodState:
+    """The equilibrium with obstacle j of `model` moved in along entry.side over entry.travel mm to its place (the
+    obstacles of index in `present` in place), from `state`; raises PlacementError where the path cannot go on.
+
+    Moved relative to the hose: the mounts, clips and the obstacles already in place are carried by (1 - t) travel
+    side and the entering obstacle stays (the weight is uniform, so only the relative position counts, and at t = 1
+    all is where it belongs); a mesh coming in is then never copied and refitted per step."""
+    path_model = only(model, present + [j], self_contact=model.self_exclusion >= 0)
+    moving = MovingObstacles(path_model, tuple(BRING_IN if k in present else None for k in range(len(model.names))))
+    move = entry.travel * entry.side
+
+    def poses(t: float) -> dict[str, Pose]:
+        return {BRING_IN: Pose(np.eye(3), (1.0 - t) * move)}
+
+    def path(t: float) -> Clamps:
+        return shifted(clamps, (1.0 - t) * move)
+
+    state, _ = follow_contact(f"bring in {model.names[j]!r}", path, props, state, ObstaclePath(moving, poses),
+                              control=control, log=log, progress=progress)
+    return state
+
+
+def _no_way_in(name: str, hint: np.ndarray | None, failed: Sequence[tuple[np.ndarray, str]]) -> str:
+    """The message of an obstacle that no way in brings to its place: why each way tried failed, and what to do."""
+    towards = "" if hint is None else f" towards hose_side {np.round(hint, 4).tolist()}"
+    if not failed:
+        return (f"placement with contact: obstacle {name!r} cannot be brought to its place{towards}: the free hose "
+                "passes through it, and every way in passes through the hose where an end fitting or a clip holds it. "
+                + ("Choose another hose_side, or leave it out (the side of least penetration)" if hint is not None else
+                   "Move the obstacle or the mounts or clips, or give it a hose_side"))
+    tried = "; ".join(f"along {np.round(side, 3).tolist()}: {_first_clause(why)}" for side, why in failed)
+    return (f"placement with contact: obstacle {name!r} cannot be brought to its place{towards}: the free hose passes "
+            f"through it, and the hose could not be pushed aside on any of {len(failed)} ways in ({tried}). The hose may "
+            "be too short to pass round it, or be pinched against another obstacle or itself: "
+            + ("choose another hose_side, or " if hint is not None else "give it a hose_side, ")
+            + "move it or the mounts, or give the hose more length")
+
+
+def _first_clause(message: str) -> str:
+    """A path failure's message up to where it says where the hose is pressed (the part that differs by way)."""
+    return message.split(". Where the path last reached")[0].split(" (the contact Newton")[0]
 
 
 def shifted(clamps: Clamps, move: np.ndarray) -> Clamps:

@@ -20,7 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-from hoseline.mechanics.contact import STATION_KINDS
+from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_KINDS
 from hoseline.mechanics.contact_newton import NEUTRAL_MODE, ContactModel, minimise_with_contact, solve_with_contact
 from hoseline.mechanics.newton import NewtonReport, RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
@@ -190,6 +190,9 @@ def hardest_push(props: RodProperties, clamps: Clamps, state: RodState, model: C
     text = (f". Where the path last reached, the hose is pressed hardest against "
             f"{model.owner(kind, int(second[hardest]))!r} at {place} ({np.linalg.norm(forces[hardest]):.4g} N, gap "
             f"{gaps[hardest]:.2g} mm)")
+    if kind == SEGMENT_SEGMENT:  # the hose against itself
+        return text + (": the hose cannot pass through itself on this path. Give it more length or less twist, move "
+                       "the mounts apart, or place it without self-contact (self = false) and read its clearance")
     held = [(clip.node, f"the clip at station {clip.node}") for clip in clamps.clips]
     held.append((props.segments, "the end fitting"))
     near = [name for node, name in held if abs(node - where) <= CRUSHED_NEXT_TO]

@@ -397,8 +397,9 @@ class _Sequence:
         if any(clip.sliding for clip in final.clips):
             final, state, report = _remesh_sliding(props, final, state, report, control.tolerance, log)
         if self.path_contact is not self.contact:  # the obstacles brought in to the placed hose
-            state, brought_in, residual = bring_in(problem.contact, problem.contact_sides, props, final, state,
-                                                   self.contact, control=control, log=log, progress=self.progress)
+            sides = problem.contact_sides or (None,) * len(problem.contact)
+            state, brought_in, residual = bring_in(problem.contact, sides, props, final, state, self.contact,
+                                                   control=control, log=log, progress=self.progress)
             if self.brought_in is None:
                 self.brought_in = brought_in
             return final, state, lock_angle_deg, residual
