@@ -1,8 +1,10 @@
 """Placement with contact from a problem file, against the same hose without: median wall time of 5 solves.
 
 Cases (tests/test_contact_placement.py): a weightless hose (335 mm, 50 segments) whose free arch passes
-through a drum (cylinder of radius 30 mm), placed without contact, with the drum, and with the drum and
-self-contact on; and a planar loop closing on itself (1000 mm between coaxial mounts 150 mm apart, self-contact,
+through a drum (cylinder of radius 30 mm), placed without contact, with the drum (brought in after the free
+placement), with the drum and self-contact on, and with the drum present along the whole path (placement =
+"along_path"); the heavy hose of hoseline/demos/floor.py placed onto the floor its fittings point at (symmetric and
+asymmetric), against the same hose without the floor; and a planar loop closing on itself (1000 mm between coaxial mounts 150 mm apart, self-contact,
 50 segments; once, it takes tens of seconds); and the plectoneme (tests/test_contact_selfloop.py): 200 mm
 between coaxial mounts 100 mm apart twisted 720 deg, which snaps (the contact Newton's downhill mode) into a
 loop touching itself (once, about 10 s).  --mesh: the issue's case, the thesis hose (100 segments, 180 deg
@@ -28,6 +30,7 @@ import numpy as np
 import trimesh
 
 from contact_breakdown import breakdown
+from hoseline.demos.floor import ASYMMETRIC, SYMMETRIC, floor_data
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.mechanics.contact_mesh import _packed_meshes
@@ -164,8 +167,13 @@ def main() -> None:
     if "--mesh" in sys.argv:
         mesh_case()
         return
+    drum_along = {"placement": "along_path", "obstacles": [DRUM]}
+    floor_free = {key: value for key, value in floor_data(*SYMMETRIC).items() if key != "contact"}
     cases = [("no contact", BASE), ("drum", BASE | {"contact": {"obstacles": [DRUM]}}),
-             ("drum and self-contact", BASE | {"contact": {"self": True, "obstacles": [DRUM]}})]
+             ("drum and self-contact", BASE | {"contact": {"self": True, "obstacles": [DRUM]}}),
+             ("drum, along the path", BASE | {"contact": drum_along}),
+             ("floor: no contact", floor_free), ("floor (symmetric)", floor_data(*SYMMETRIC)),
+             ("floor (asymmetric)", floor_data(*ASYMMETRIC))]
     for label, data in cases:
         problem = problem_from_dict(data)
         result = solve(problem, estimate_error=False)  # compiles

@@ -15,6 +15,7 @@ import pytest
 
 from floor_free_boundary import solve_resting_elastica
 from test_contact_cushion import strut_problem
+from hoseline.demos.floor import ASYMMETRIC, LENGTH, RADIUS, STIFFNESS, SYMMETRIC, WEIGHT, floor_data
 from hoseline.io.problem_file import problem_from_dict, problem_to_toml
 from hoseline.mechanics.rotations import rotation_matrix
 from hoseline.model.mounts import Mount
@@ -23,28 +24,6 @@ from hoseline.procedures.contact import bring_in
 from hoseline.procedures.contact.model import DEFAULT_ACTIVATION
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.sequence import solve
-
-LENGTH, STIFFNESS, RADIUS = 2000.0, 1.6e5, 5.0
-WEIGHT = 80.0 * STIFFNESS / LENGTH ** 3  # N/mm: w L^3 / EI = 80
-GRAVITY = 9.81
-
-
-def floor_case(start, start_angle, end, end_angle, segments=100) -> dict:
-    """A heavy hose between mounts (x, z) mm above the floor z = 0, leaving the start at start_angle and arriving at the
-    end at end_angle (rad, from +x towards +z), in the x-z plane."""
-    return {"hose": {"length": LENGTH, "outer_diameter": 2 * RADIUS, "bending_stiffness": STIFFNESS,
-                     "mass_per_length": WEIGHT * 1e3 / GRAVITY, "segments": segments},
-            "start": {"point": [start[0], 0.0, start[1]], "direction": [math.cos(start_angle), 0.0, math.sin(start_angle)]},
-            "end": {"point": [end[0], 0.0, end[1]], "direction": [-math.cos(end_angle), 0.0, -math.sin(end_angle)]},
-            "environment": {"gravity": [0.0, 0.0, -GRAVITY]},
-            "contact": {"obstacles": [{"kind": "plane", "point": [0, 0, 0], "normal": [0, 0, 1], "name": "floor"}]}}
-
-
-# fittings pointing 60 degrees below horizontal towards the floor, 200 mm above it; and an asymmetric layout (both
-# with the lying part in tension: with more slack it is pushed together and buckles sideways on the frictionless floor,
-# as the placement finds, e.g. mounts 850 mm from the middle: the hose then lies in a loop 348 mm wide)
-SYMMETRIC = ((-940.0, 200.0), -math.pi / 3, (940.0, 200.0), math.pi / 3)
-ASYMMETRIC = ((-930.0, 200.0), -math.pi / 3, (950.0, 240.0), math.radians(50.0))
 
 
 def lying_stations(result) -> np.ndarray:
@@ -63,13 +42,13 @@ def shooting_reference(result, layout):
 @pytest.fixture(scope="module", params=[SYMMETRIC, ASYMMETRIC], ids=["symmetric", "asymmetric"])
 def on_the_floor(request):
     layout = request.param
-    problem = problem_from_dict(floor_case(*layout))
+    problem = problem_from_dict(floor_data(*layout))
     result = solve(problem, estimate_error=False)
     return layout, problem, result, shooting_reference(result, layout)
 
 
 def test_the_straight_start_crosses_the_floor_and_the_free_hose_hangs_through_it():
-    free = solve(problem_from_dict({key: value for key, value in floor_case(*SYMMETRIC).items() if key != "contact"}),
+    free = solve(problem_from_dict({key: value for key, value in floor_data(*SYMMETRIC).items() if key != "contact"}),
                  estimate_error=False)
     assert free.centerline[:, 2].min() < -20.0  # 20 mm below the floor without it
     straight_end = np.array([-940.0, 0.0, 200.0]) + LENGTH * np.array([0.5, 0.0, -math.sqrt(0.75)])
@@ -125,7 +104,7 @@ def test_the_mounts_and_the_floor_carry_the_weight(on_the_floor):
 
 def test_hoseline_solve_places_the_heavy_hose_onto_the_floor(tmp_path):
     problem_file = tmp_path / "floor.toml"
-    problem_file.write_text(problem_to_toml(problem_from_dict(floor_case(*SYMMETRIC))))
+    problem_file.write_text(problem_to_toml(problem_from_dict(floor_data(*SYMMETRIC))))
     command = Path(sys.executable).parent / "hoseline"
     done = subprocess.run([str(command), "solve", str(problem_file), "-o", str(tmp_path / "out"), "--quiet"],
                           capture_output=True, text=True, timeout=300)
@@ -137,7 +116,7 @@ def test_hoseline_solve_places_the_heavy_hose_onto_the_floor(tmp_path):
 
 def test_a_rigidly_moved_problem_gives_the_rigidly_moved_answer():
     layout = ASYMMETRIC
-    problem = problem_from_dict(floor_case(*layout))
+    problem = problem_from_dict(floor_data(*layout))
     turn = rotation_matrix(np.array([0.3, -0.8, 0.5]) * 1.1)
     shift = np.array([120.0, -40.0, 75.0])
     floor = problem.contact[0]

@@ -18,7 +18,8 @@ from hoseline.model.problem import Problem
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.procedures.contact.placement import contact_reports
 from hoseline.procedures.placement.sequence import solve
-from test_contact_bring_in import ASYMMETRIC, SYMMETRIC, floor_case, shooting_reference
+from test_contact_bring_in import shooting_reference
+from hoseline.demos.floor import ASYMMETRIC, SYMMETRIC, floor_data
 from test_contact_bring_in import LENGTH as HEAVY_LENGTH
 from test_contact_bring_in import WEIGHT as HEAVY_WEIGHT
 from test_contact_cylinder import DRUM, over_the_drum  # noqa: F401 (a fixture)
@@ -133,7 +134,7 @@ def test_the_summary_lists_the_carried_arcs_and_the_touchdowns(floor):
 def placed_on_the_floor(request):
     """The issue's heavy hose (w L^3 / EI = 80) placed by solve onto the floor its fittings point at, and the
     free-boundary shooting solution of its layout."""
-    result = solve(problem_from_dict(floor_case(*request.param)), estimate_error=False)
+    result = solve(problem_from_dict(floor_data(*request.param)), estimate_error=False)
     return result, shooting_reference(result, request.param)
 
 
