@@ -144,22 +144,24 @@ def test_accuracy_with_contact_refines_until_the_estimate_meets_it():
     assert any(event.startswith("accuracy: with contact, estimated errors") for event in result.events)
 
 
-def test_an_end_mount_inside_an_obstacle_is_refused_naming_the_fitting():
+@pytest.mark.parametrize("placement", ["bring_in", "along_path"])
+def test_an_end_mount_inside_an_obstacle_is_refused_as_bad_input_naming_the_fitting(placement):
     sphere = {"kind": "sphere", "center": [100.0, 0.0, -82.0], "radius": 4.0, "name": "knob"}  # around the end point
-    with pytest.raises(PlacementError) as failure:
-        solve(problem_from_dict(with_contact({"obstacles": [sphere]})), estimate_error=False)
+    with pytest.raises(ProblemFileError) as failure:
+        problem_from_dict(with_contact({"placement": placement, "obstacles": [sphere]}))
     message = str(failure.value)
-    assert "the hose at the end fitting is held inside obstacle 'knob'" in message and "Move the obstacle" in message
+    assert "[contact]: the hose at the end fitting is held inside obstacle 'knob'" in message
+    assert "Move the obstacle" in message
 
 
-def test_along_the_path_an_end_mount_inside_an_obstacle_is_refused_naming_where_its_path_enters():
-    sphere = {"kind": "sphere", "center": [100.0, 0.0, -82.0], "radius": 4.0, "name": "knob"}  # around the end point
-    with pytest.raises(PlacementError) as failure:
-        solve(problem_from_dict(with_contact({"placement": "along_path", "obstacles": [sphere]})),
-              estimate_error=False)
-    message = str(failure.value)
-    assert "carries the end fitting on a straight line" in message and "obstacle 'knob'" in message
-    assert re.search(r"between fractions 0\.\d+ and 1\.000", message)
+def test_the_solver_refuses_a_mount_inside_an_obstacle_too_naming_the_fitting():
+    from dataclasses import replace
+
+    from hoseline.model.obstacles import Sphere
+
+    problem = replace(problem_from_dict(BASE), contact=(Sphere([100.0, 0.0, -82.0], 4.0, "knob"),))  # not from a file
+    with pytest.raises(PlacementError, match="the hose at the end fitting is held inside obstacle 'knob'"):
+        solve(problem, estimate_error=False)
 
 
 def test_a_drum_of_40_mm_across_the_end_fitting_s_path_is_brought_in_and_the_hose_rests_on_it():

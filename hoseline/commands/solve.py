@@ -156,7 +156,8 @@ def print_lengths(problem) -> None:
 
 def print_contacts(result) -> None:
     """One line per obstacle of a placement with contact: the total force (N), the length the hose lies on and its
-    distributed force, the point forces (N) at the touch-downs and point contacts (arc length, mm), the smallest gap."""
+    distributed force, the point forces (N) at the touch-downs and point contacts (arc length, mm), the smallest gap;
+    then one per obstacle brought in after the free placement: how far (mm), the side the hose went to, and why."""
     for contact in result.contacts:
         what = "itself" if contact.name == "self" else f"{contact.name!r} ({contact.kind})"
         lying = [f"{arc.length:.1f} mm lying (s = {arc.start:.1f} to {arc.end:.1f} mm, "
@@ -165,6 +166,13 @@ def print_contacts(result) -> None:
         carried = "; ".join(lying + ([f"point force(s) {', '.join(points)}"] if points else [])) or "not touching"
         Console().print(f"contact with {what}: force {float(np.linalg.norm(contact.total_force)):.4g} N, {carried}; "
                         f"smallest gap {contact.min_gap:.3g} mm", soft_wrap=True)
+    for choice in result.obstacle_placement:
+        if choice.rule != "clear":
+            given_up = f", {choice.ways_failed} shorter way(s) given up" if choice.ways_failed else ""
+            Console().print(f"{choice.name!r} brought in {choice.travel:.4g} mm, the hose pushed towards "
+                            f"{np.round(choice.hose_side, 3).tolist()} ({choice.rule}{given_up}; the free hose "
+                            f"{'entered' if choice.free_gap < 0.0 else 'touched'} it by {abs(choice.free_gap):.4g} mm)",
+                            soft_wrap=True)
 
 
 def print_exports(folder: Path, files) -> None:

@@ -784,7 +784,7 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
                              "remove preset_radius or the clips")
         if stiffeners is not None:  # the 8-spring chord must fit the hose: refused here, not in the solver
             stiffeners.anchors(hose.outer_radius, hose.segment_length, hose.segment_length)
-        return Problem(
+        problem = Problem(
             hose=hose,
             start=Mount(point=spec.start.point, direction=spec.start.direction),
             end=Mount(point=spec.end.point, direction=spec.end.direction),
@@ -798,6 +798,13 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             contact_sides=() if spec.contact is None else tuple(table.hose_side for table in spec.contact.obstacles),
             contact_placement="bring_in" if spec.contact is None else spec.contact.placement,
         )
+        if problem.contact:  # a mount or clip inside an obstacle: no placement exists; said before any solve
+            from hoseline.procedures.contact.bring_in import mounts_inside  # the contact model: only with contact
+
+            inside = mounts_inside(problem)
+            if inside is not None:
+                raise ValueError(f"[contact]: {inside}")
+        return problem
     except ValueError as exc:  # the model's own checks; its messages name the field
         raise ProblemFileError(f"{source}: {exc}") from None
 

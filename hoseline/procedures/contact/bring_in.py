@@ -42,6 +42,7 @@ from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.model.motion import Pose
 from hoseline.model.obstacles import Box, Cylinder, Mesh, Obstacle, Plane, Sphere
+from hoseline.model.problem import Problem
 from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact, hardest_push
 from hoseline.procedures.contact.moving import MovingObstacles, ObstaclePath
 from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, Progress, StepControl
@@ -382,11 +383,39 @@ def _check_held_clear(alone: ContactModel, obstacle: Obstacle, held: Sequence[np
     """Raise PlacementError if a held piece of the hose (at an end fitting or a clip) is inside `obstacle` where it
     is: no placement keeps the hose out of it."""
     names = ["the start fitting", "the end fitting"] + [f"the clip at station {clip.node}" for clip in clamps.clips]
-    for name, piece in zip(names, held):
+    inside = held_inside(alone, obstacle.name, held, names)
+    if inside is not None:
+        raise PlacementError(f"placement with contact: {inside}")
+
+
+def held_inside(alone: ContactModel, name: str, held: Sequence[np.ndarray], names: Sequence[str]) -> str | None:
+    """What is held inside the obstacle `name` (the one of `alone`), for a message: the first of the held pieces
+    (mm, named by `names`) within the hose radius of it; None if none is."""
+    for what, piece in zip(names, held):
         gap = _gap(alone, piece)
         if gap <= 0.0:
-            raise PlacementError(
-                f"placement with contact: the hose at {name} is held inside obstacle {obstacle.name!r} (by "
-                f"{-gap:.4g} mm within the hose radius of its surface): no placement keeps the hose out of it. Move "
-                "the obstacle or the mount or clip, or remove the obstacle and read its clearance")
+            return (f"the hose at {what} is held inside obstacle {name!r} (by {-gap:.4g} mm within the hose radius "
+                    "of its surface): no placement keeps the hose out of it. Move the obstacle or the mount or clip, "
+                    "or remove the obstacle and read its clearance")
+    return None
 
+
+def mounts_inside(problem: Problem) -> str | None:
+    """Where a mount or clip point of `problem` lies within the hose radius of an obstacle (as held_inside says
+    it), for the problem file's check before any solve; None if every one is clear."""
+    from hoseline.procedures.contact.placement import problem_contact_model  # its model, as the solve builds it
+
+    if not problem.contact:
+        return None
+    model = problem_contact_model(problem)
+    stub = HELD_STUB * model.hose_radius
+    held = [(problem.start.point, problem.start.direction, "the start fitting"),
+            (problem.end.point, -problem.end.direction, "the end fitting")]
+    held += [(clip.point, np.eye(3)[2] if clip.direction is None else clip.direction,
+              f"clip {clip.name or k + 1!r} (clips[{k}])") for k, clip in enumerate(problem.clips)]
+    pieces = [np.array([point, point + stub * tangent]) for point, tangent, _ in held]
+    for j, obstacle in enumerate(problem.contact):
+        inside = held_inside(only(model, [j], self_contact=False), obstacle.name, pieces, [name for *_, name in held])
+        if inside is not None:
+            return inside
+    return None
