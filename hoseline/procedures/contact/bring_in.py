@@ -23,9 +23,12 @@ its axis and the 64; a box: the 64 and its six face normals; a mesh: the 64), th
 obstacle has the shortest way to come in from where it clears the hose, and whose way does not pass
 through a held point of the hose (the stations at the end fittings and at clips, which cannot move
 aside).  The travel along a direction is found by sphere tracing: from a position where the obstacle
-clears the hose by a slab, it is stepped towards its place by the smallest gap (a step shorter than
-every gap cannot reach the hose) until it touches; then it is set back by a clearance (START_CLEARANCE
-hose radii).  The choice is reported per obstacle (BroughtIn, result.json summary.contact.placement).
+clears the hose by a slab, it is stepped towards its place by the smallest gap less half a clearance
+(START_CLEARANCE hose radii; such a step cannot reach the hose) until the gap falls below the clearance, then
+backed off by the shortfall until it clears the hose by at least half the clearance.  A way along which the
+hose cannot be pushed (a span too short to pass round the obstacle, a pinch) is given up for the next side at
+least 45 degrees from it (MOST_WAYS in all).  The choice is reported per obstacle (BroughtIn, result.json
+summary.contact.placement).
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ from hoseline.mechanics.contact_newton import ContactModel, solve_with_contact
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.model.motion import Pose
-from hoseline.model.obstacles import Box, Cylinder, Mesh, Obstacle, Plane, Sphere
+from hoseline.model.obstacles import Box, Cylinder, Obstacle, Plane, Sphere
 from hoseline.model.problem import Problem
 from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact, hardest_push
 from hoseline.procedures.contact.moving import MovingObstacles, ObstaclePath
@@ -52,6 +55,7 @@ SPREAD_DIRECTIONS = 64  # candidate directions spread over the sphere (a Fibonac
 AROUND_AXIS = 32  # more candidates about a cylinder's axis (perpendicular to it)
 TRACE_STEPS = 2000  # of one sphere trace: a trace that has not met the hose by then (grazing it) is given up
 SMALLEST_TRACE_STEP = 0.02  # hose radii: the check of a held piece's way steps at least this far
+HELD_STUB = 1e-3  # hose radii: a held point is measured as a stub this long along the hose (the gaps need a segment)
 HINT_COSINE = math.cos(math.radians(45.0))  # a hose_side is met by the shortest way in within 45 degrees of it
 MOST_WAYS = 4  # ways in tried per obstacle (each at least 45 degrees from the ways that failed) before it is refused
 BRING_IN = "bringing in"  # the body name of the obstacle being brought in (the others are fixed)
@@ -132,8 +136,7 @@ def reach_along(obstacle: Obstacle, direction: np.ndarray) -> float:
         return float(obstacle.centre @ direction) + obstacle.radius
     if isinstance(obstacle, Cylinder):
         return max(float(obstacle.start @ direction), float(obstacle.end @ direction)) + obstacle.radius
-    vertices = obstacle.triangles()[0] if isinstance(obstacle, (Box, Mesh)) else None
-    return float(np.max(vertices @ direction))
+    return float(np.max(obstacle.triangles()[0] @ direction))  # a box or a mesh: its corners
 
 
 def entry_travel(alone: ContactModel, obstacle: Obstacle, pieces: Sequence[np.ndarray], side: np.ndarray) -> float:
@@ -173,9 +176,6 @@ def _gap(alone: ContactModel, nodes: np.ndarray) -> float:
     start point)."""
     first = (nodes[0] - alone.planes[:, :3]) @ alone.planes[:, 3:].T if alone.planes.size else np.zeros((0, 0))
     return float(min([*alone.smallest_gaps(nodes).values(), *(np.diagonal(first) - alone.hose_radius)]))
-
-
-HELD_STUB = 1e-3  # hose radii: a held point is measured as a stub this long along the hose (the gaps need a segment)
 
 
 def held_pieces(clamps: Clamps, radius: float) -> list[np.ndarray]:
