@@ -18,9 +18,9 @@ for the stations, each obstacle's total force and the mounts' reactions.
 
 from __future__ import annotations
 
-import numpy as np
 from dataclasses import dataclass
 
+import numpy as np
 from scipy.interpolate import CubicSpline
 
 from hoseline.mechanics.clipped_newton import station_positions
