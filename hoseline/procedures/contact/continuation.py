@@ -3,12 +3,14 @@
 As procedures/placement/continuation.py's follow, with the contact Newton
 (mechanics/contact_newton.py): each step starts from the previous equilibrium, which never
 penetrates, so the step filter keeps every later state out of the obstacles too.  A step that
-does not converge is halved.  Stability is checked at every step.  Where the path loses it (a
-step ends on an unstable equilibrium) or ends in a fold (the steps keep failing: the hose
-snaps), the hose is relaxed downhill to a stable equilibrium at that fraction by the contact
-Newton's downhill mode (minimise_with_contact), the snap is recorded as an event of the log
-with where it happened and how far the hose moved, and the path is followed on from there;
-only if no stable equilibrium is found does the path fail with PlacementError naming where.
+does not converge is halved, or, where the path bisects a fold that FoldWatch predicts from the
+lowest eigenvalues, shortened towards it.  Stability is checked at every step.  Where the path
+loses it (a step ends on an unstable equilibrium) or ends in a fold (the steps keep failing, or
+a predicted fold is reached: the hose snaps), the hose is relaxed downhill to a stable
+equilibrium at that fraction by the contact Newton's downhill mode (minimise_with_contact), the
+snap is recorded as an event of the log with where it happened and how far the hose moved, and
+the path is followed on from there; only if no stable equilibrium is found does the path fail
+with PlacementError naming where.
 With obstacles that move along the path (a sweep's, ObstaclePath) the previous equilibrium may be
 inside them at the next fraction, or one may have passed through the hose on the way: each step
 starts from a state the move check admits (procedures/contact/moving.py), else it is halved.
@@ -18,10 +20,19 @@ from __future__ import annotations
 
 from typing import Callable
 
+import math
+
 import numpy as np
 
 from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_KINDS
-from hoseline.mechanics.contact_newton import NEUTRAL_MODE, ContactModel, minimise_with_contact, solve_with_contact
+from hoseline.mechanics.contact_newton import (
+    NEUTRAL_MODE,
+    ContactModel,
+    evaluate_contact,
+    lowest_stiffnesses,
+    minimise_with_contact,
+    solve_with_contact,
+)
 from hoseline.mechanics.newton import NewtonReport, RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.procedures.contact.moving import ObstaclePath
@@ -41,6 +52,10 @@ MOST_SNAPS = 100  # of one path: a path that keeps snapping is not being followe
 # crept on by hundreds of tiny snaps for minutes in the fuzzing campaign): it fails, saying so
 MOST_ITERATIONS = 20_000  # Newton iterations of one path: a path beyond them creeps (the fuzzing campaign's soft hose
 # of 250 mm segments took 222 785 in 75 s before it failed; the issue's strut takes 579, the plectoneme 1265)
+FOLD_MODES = 2  # the lowest eigenvalues the fold predictor extrapolates to zero (the one that vanishes at the fold is
+# not the lowest until close to it: on the plectoneme's first fold it was the second lowest 0.007 of the path before)
+APPROACH = 0.75  # of the distance to a predicted fold: the step taken towards it (a late prediction is not passed;
+# on the plectoneme they came early: 0.640, 0.652, 0.658 from 0.604 on, for a fold at 0.6616)
 SMALLEST_MOVE = 1e-9  # of the path: the shortest step the move check of moving obstacles halves down to (an obstacle
 # pushing the hose may move less than the gap, d_hat / 2 or less, per step until there is a prediction)
 
@@ -75,6 +90,9 @@ def follow_contact(
     clamps_now, placed = path(start), moving.at(start) if moving is not None else None
     previous = None if before is None else (start - 1.0, before)  # for the secant prediction
     t, dt, iterations, snaps = start, min(control.first, 1.0 - start), 0, 0
+    folds = FoldWatch(props)
+    folds.add(t, state, clamps_now, placed.model if moving is not None else model)
+    fold_at = None  # a fold predicted just before t + dt: the hose snaps at t + dt without a Newton try
     while t < 1.0 - 1e-14:
         t_next = min(1.0, t + dt)
         clamps = path(t_next)
@@ -91,35 +109,43 @@ def follow_contact(
                     f"passing through the hose (every step down to {dt:.2g} of the path would carry one across it or "
                     "into it); make the hose clear the moving obstacles, or move them less between poses")
             if begin is None:
-                dt *= 0.5
+                dt, fold_at = 0.5 * dt, None
                 continue
-        last_try = 0.5 * dt < control.smallest
-        trial, report = solve_with_contact(props, clamps, begin, model_next, tolerance=tolerance,
-                                           max_iterations=STEP_ITERATIONS,
-                                           max_halvings=LAST_STEP_HALVINGS if last_try else STEP_HALVINGS,
-                                           start_is_clear=moving is not None,  # the move check admitted it
-                                           stall=0 if last_try else STALLED_ITERATIONS)
-        iterations += report.iterations
-        if log is not None:
-            log.iterations += report.iterations
-        if iterations > MOST_ITERATIONS:
-            raise PlacementError(
-                f"placement phase '{phase}' with contact failed at fraction {t:.4f}: its path took more than "
-                f"{MOST_ITERATIONS} Newton iterations (the contact Newton converges too slowly for the path's steps "
-                f"to grow: a barrier far stiffer than the hose, segments {props.segment_length:.3g} mm long for a hose "
-                f"of outer radius {model_radius(model):.3g} mm, stiffness up to {props.largest_stiffness:.3g} N*mm^2); "
-                "try more segments, or place without the obstacles or self-contact and read the clearance")
-        if report.converged and report.unstable_directions != 0:  # lost stability between t and t_next
-            start_from, what = trial, (f"stability lost between fractions {t:.4f} and {t_next:.4f} "
-                                       f"({report.unstable_directions} unstable direction(s))")
-        elif not report.converged and not last_try:
-            dt *= 0.5
-            continue
-        elif not report.converged:  # the branch ends in a fold: the hose snaps
-            start_from, what = begin, f"the equilibrium branch ended near fraction {t:.4f} (fold)"
+        if fold_at is not None:  # FoldWatch: the branch ends in a fold just before t_next, where the hose snaps
+            report, start_from = None, begin
+            what = f"the equilibrium branch ended in a fold predicted at fraction {fold_at:.5f}"
         else:
-            start_from = None
+            trial, report = _step(props, clamps, begin, model_next, tolerance, 0.5 * dt < control.smallest,
+                                  moving is not None)
+            iterations += report.iterations
+            if log is not None:
+                log.iterations += report.iterations
+            if iterations > MOST_ITERATIONS:
+                raise PlacementError(
+                    f"placement phase '{phase}' with contact failed at fraction {t:.4f}: its path took more than "
+                    f"{MOST_ITERATIONS} Newton iterations (the contact Newton converges too slowly for the path's "
+                    f"steps to grow: a barrier far stiffer than the hose, segments {props.segment_length:.3g} mm long "
+                    f"for a hose of outer radius {model_radius(model):.3g} mm, stiffness up to "
+                    f"{props.largest_stiffness:.3g} N*mm^2); try more segments, or place without the obstacles or "
+                    "self-contact and read the clearance")
+            start_from, what = None, ""
+            if report.converged and report.unstable_directions != 0:  # lost stability between t and t_next
+                start_from, what = trial, (f"stability lost between fractions {t:.4f} and {t_next:.4f} "
+                                           f"({report.unstable_directions} unstable direction(s))")
+            elif not report.converged and 0.5 * dt >= control.smallest:
+                dt = folds.failed(t, dt)  # halved, or shortened towards a fold predicted within the try
+                continue
+            elif not report.converged:  # the branch ends in a fold: the hose snaps
+                start_from, what = begin, f"the equilibrium branch ended near fraction {t:.4f} (fold)"
         if start_from is not None:
+            relaxed, downhill = _snap(phase, clamps, props, state, start_from, model_next, tolerance, t_next, what, log)
+            iterations += downhill.iterations
+            if relaxed is None and fold_at is not None:  # no stable state past the predicted fold: halve as before
+                dt, fold_at, folds.aim, folds.trusted = 0.5 * dt, None, None, False
+                continue
+            if relaxed is None:
+                raise _nothing_stable(phase, props, t, t_next, report, downhill, state,
+                                      (clamps_now, placed.model if moving is not None else model))
             snaps += 1
             if snaps > MOST_SNAPS:
                 h = props.segment_length
@@ -128,20 +154,105 @@ def follow_contact(
                     f"{MOST_SNAPS} times on the way (it keeps meeting folds: a hose coiling onto itself or creeping "
                     f"along an obstacle); segments {h:.3g} mm long for a hose of outer radius {model_radius(model):.3g} mm"
                     " may be too coarse to follow it: try more segments, less twist or obstacles further from the path")
-            trial, used = _snap(phase, clamps, props, state, start_from, model_next, tolerance, t, t_next, what,
-                                report, log, (clamps_now, placed.model if moving is not None else model))
-            iterations += used
-            dt = min(control.first, 1.0 - t_next)
+            trial, dt, folds = relaxed, min(control.first, 1.0 - t_next), FoldWatch(props)  # a new branch
         previous = (t, state) if start_from is None else None  # no secant across a snap
+        folds.add(t_next, trial, clamps, model_next)
         state, t, clamps_now, placed = trial, t_next, clamps, placed_next
         if log is not None:
             log.steps += 1
         if progress is not None:
             progress(phase, t)
-        if start_from is None and report.iterations <= control.fast_iterations:
+        fold_at = None
+        if folds.aim is not None:  # this step went towards a predicted fold
+            dt, fold_at = folds.converged(t, control)
+        elif start_from is None and report.iterations <= control.fast_iterations:
             dt = min(control.largest, 2.0 * dt)
     state, used = polish(props, path(1.0), state, placed.model if moving is not None else model, log)
     return state, iterations + used
+
+
+class FoldWatch:
+    """Where the branch being followed ends in a fold, predicted from its last two equilibria (docs/model.md,
+    Contact, "Passing folds").
+
+    At a fold an eigenvalue lambda of the Hessian on the constraint tangent space (N*mm/rad^2) goes to zero as
+    sqrt(t_fold - t) (t: the path fraction), so lambda^2 is linear in t near it.  The one that vanishes may lie above
+    another until close to the fold, where the two cross (an avoided crossing: each turns sharply), so the watch
+    extrapolates the square of the product of the FOLD_MODES lowest (smooth through such a crossing, linear near the
+    fold while the other stays finite) along the line through the last two equilibria to zero.
+    It acts only on evidence; otherwise the path halves its failed steps as before:
+    - it is asked (`failed`) only where the path is bisecting: at the second failed try in a row from an equilibrium
+      that was itself reached by a step shortened after a failure (a try that fails where half of it converges and
+      the path grows on from there was a step grown too long, as the loop's and the strut's failures: no eigenvalues);
+    - the predicted fold must lie in the later half of the failed try (the halving's next try stops short of it too):
+      the path steps APPROACH of the way to it, never much shorter than halving (the loop's dip at fraction 0.825,
+      predicted 3e-4 ahead of a failed try 0.025 long, is left to the halving);
+    - after each step towards it the next prediction must come nearer (`converged`), else the watch ends and the path
+      takes the step halving would have taken (`fallback`);
+    - once the fold is within two control.smallest (where halving makes its last try) after a prediction that came
+      nearer, the path steps control.smallest past it, where the hose snaps without a Newton try; if nothing stable is
+      found downhill there, the path halves as before and the watch is off for the branch (`trusted`).
+    The eigenvalues are dense (contact_newton.lowest_stiffnesses: 0.5 ms for 50 segments, 3 ms for 100).
+    """
+
+    def __init__(self, props: RodProperties):
+        self.props = props
+        self.points: list[list] = []  # [t, state, clamps, model, product^2 or None] of the last two equilibria
+        self.aim: float | None = None  # the distance (fraction) to the fold the last step went towards, if it did
+        self.fallback = 0.0  # the step that halving would have taken: where the fold recedes, the path goes on with it
+        self.failures = 0  # path steps from the last equilibrium that failed
+        self.bisecting = False  # the last equilibrium was reached by a step shortened after a failure
+        self.trusted = True  # False once a predicted fold proved wrong on this branch (nothing stable past it)
+
+    def add(self, t: float, state: RodState, clamps: Clamps, model: ContactModel) -> None:
+        """An equilibrium of the branch at fraction t, held by `clamps`, against `model`."""
+        self.points = self.points[-1:] + [[t, state, clamps, model, None]]
+        self.bisecting, self.failures = self.failures > 0, 0
+
+    def _squared(self, point: list) -> float:
+        """The product of the FOLD_MODES lowest eigenvalues at an equilibrium, squared (NaN if there are fewer)."""
+        if point[4] is None:
+            values = lowest_stiffnesses(evaluate_contact(self.props, point[2], point[1], point[3]), FOLD_MODES)
+            point[4] = float(np.prod(values)) ** 2 if values.size == FOLD_MODES else math.nan
+        return point[4]
+
+    def fold(self) -> float | None:
+        """The fraction of the fold predicted from the last two equilibria, or None (fewer, or the product not falling
+        between them)."""
+        if len(self.points) < 2 or not self.trusted:
+            return None
+        (t0, *_), (t1, *_) = self.points
+        now = self._squared(self.points[1])
+        if not now > 0.0:  # (NaN fails)
+            return None
+        before = self._squared(self.points[0])
+        return t1 + now * (t1 - t0) / (before - now) if now < before else None
+
+    def failed(self, t: float, dt: float) -> float:
+        """The next step from the equilibrium at fraction t after a try dt long from it failed: APPROACH of the way to
+        a fold predicted in the later half of the failed try where the path is bisecting (the watch starts), else half
+        the failed try as before."""
+        self.failures += 1
+        ahead = self.fold() if self.aim is None and self.bisecting and self.failures >= 2 else None
+        if ahead is None or not t + 0.5 * dt <= ahead <= t + dt:
+            self.aim = None
+            return 0.5 * dt
+        self.aim, self.fallback = ahead - t, 0.5 * dt
+        return APPROACH * self.aim
+
+    def converged(self, t: float, control: StepControl) -> tuple[float, float | None]:
+        """(the next step, the fold's fraction if the hose snaps at its end) after a step towards a fold converged at
+        fraction t: where the fold's prediction came nearer, APPROACH of the way on to it, or once it is within two
+        control.smallest (where halving makes its last try), control.smallest past it, where the hose snaps; else the
+        watch ends with the fallback step."""
+        ahead = self.fold()
+        if ahead is None or ahead - t >= self.aim:
+            self.aim = None
+            return self.fallback, None
+        self.aim = ahead - t
+        if self.aim <= 2.0 * control.smallest and ahead < 1.0:
+            return self.aim + control.smallest, ahead
+        return min(control.largest, APPROACH * self.aim), None
 
 
 def polish(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel,
@@ -203,28 +314,45 @@ def hardest_push(props: RodProperties, clamps: Clamps, state: RodState, model: C
     return text
 
 
+def _step(props: RodProperties, clamps: Clamps, begin: RodState, model: ContactModel, tolerance: float,
+          last_try: bool, start_is_clear: bool) -> tuple[RodState, NewtonReport]:
+    """One path step's Newton from `begin` (clear of the obstacles; start_is_clear: the move check showed it) under
+    `clamps`; the last try, at the smallest step, gets more halvings of its Newton steps and is not stopped as
+    stalled."""
+    return solve_with_contact(props, clamps, begin, model, tolerance=tolerance, max_iterations=STEP_ITERATIONS,
+                              max_halvings=LAST_STEP_HALVINGS if last_try else STEP_HALVINGS,
+                              start_is_clear=start_is_clear, stall=0 if last_try else STALLED_ITERATIONS)
+
+
 def _snap(phase: str, clamps: Clamps, props: RodProperties, before: RodState, start_from: RodState,
-          model: ContactModel, tolerance: float, t: float, t_next: float, what: str, failure: NewtonReport,
-          log: ContinuationLog | None, reached: tuple[Clamps, ContactModel]) -> tuple[RodState, int]:
-    """The stable equilibrium downhill of `start_from` under `clamps` (the snap at fraction t_next), and the
-    Newton iterations used; the event goes to the log.  Raises PlacementError when there is none, saying where
-    `before` is pressed hardest under `reached`, the clamps and contact model at fraction t (obstacles that move
-    along the path have moved on by t_next, into where the hose was)."""
+          model: ContactModel, tolerance: float, t_next: float, what: str,
+          log: ContinuationLog | None) -> tuple[RodState | None, NewtonReport]:
+    """The stable equilibrium downhill of `start_from` under `clamps` (the snap at fraction t_next; None if there is
+    none) and the downhill walk's report; the event goes to the log (`before`: the last equilibrium, for how far the
+    hose moved)."""
     relaxed, report = minimise_with_contact(props, clamps, start_from, model, tolerance=tolerance,
                                             max_iterations=DOWNHILL_ITERATIONS)
     if log is not None:
         log.iterations += report.iterations
     if not report.converged or report.unstable_directions != 0:
-        problem = failure.message or f"{failure.unstable_directions} unstable direction(s)"
-        raise PlacementError(
-            f"placement phase '{phase}' with contact failed at fraction {t_next:.4f} (last converged {t:.4f}): "
-            f"residual {failure.residual:.2e} ({problem}), and no stable equilibrium was found downhill "
-            f"({report.message or f'{report.unstable_directions} unstable direction(s)'})"
-            + hardest_push(props, reached[0], before, reached[1]))
+        return None, report
     if report.message == NEUTRAL_MODE:  # no snap: the step only looked unstable
-        return relaxed, report.iterations
+        return relaxed, report
     jump = largest_movement(props, clamps, before, relaxed)
     if log is not None:
         log.events.append(f"{phase}: {what}; with contact, the hose snaps downhill to a stable equilibrium at "
                           f"fraction {t_next:.4f}, largest station movement {jump:.3f} mm")
-    return relaxed, report.iterations
+    return relaxed, report
+
+
+def _nothing_stable(phase: str, props: RodProperties, t: float, t_next: float, failure: NewtonReport,
+                    downhill: NewtonReport, before: RodState, reached: tuple[Clamps, ContactModel]) -> PlacementError:
+    """The error of a path that found no stable equilibrium downhill at fraction t_next, saying where `before` (the
+    equilibrium at fraction t) is pressed hardest under `reached`, the clamps and contact model at fraction t
+    (obstacles that move along the path have moved on by t_next, into where the hose was)."""
+    problem = failure.message or f"{failure.unstable_directions} unstable direction(s)"
+    return PlacementError(
+        f"placement phase '{phase}' with contact failed at fraction {t_next:.4f} (last converged {t:.4f}): "
+        f"residual {failure.residual:.2e} ({problem}), and no stable equilibrium was found downhill "
+        f"({downhill.message or f'{downhill.unstable_directions} unstable direction(s)'})"
+        + hardest_push(props, reached[0], before, reached[1]))
