@@ -33,7 +33,7 @@ def _report(props, clamps, state, model, obstacle, gravity):
                 torsional_stiffness=props.stiffness[2], segments=props.segments)
     start, end = Mount(clamps.start_point, clamps.start_frame[2]), Mount(clamps.end_point, -clamps.end_frame[2])
     problem = Problem(hose, start, end, gravity=gravity, contact=[obstacle])
-    report, = contact_reports(problem, props, clamps, state, model)
+    (report,), _ = contact_reports(problem, props, clamps, state, model)
     return report
 
 

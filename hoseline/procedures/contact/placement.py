@@ -111,9 +111,13 @@ def _entered(model: ContactModel, nodes: np.ndarray) -> list[str]:
 
 
 def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState,
-                    model: ContactModel) -> list[ObstacleContact]:
-    """One ObstacleContact per obstacle of the problem (and "self" with self-contact) at `state` (mm, N): its
-    barrier pairs, and where it carries its force (procedures/contact/extent.py)."""
+                    model: ContactModel) -> tuple[list[ObstacleContact], np.ndarray]:
+    """(reports, forces beyond): one ObstacleContact per obstacle of the problem (and "self" with self-contact) at
+    `state` (mm, N), its barrier pairs and where it carries its force (procedures/contact/extent.py); and the
+    (N+1, 3) N sum of the contact forces on the part of the hose beyond each station (forces_beyond), from the
+    same pairs.  A station's force (station-plane, station-triangle) at station k acts beyond the stations before
+    k; a segment's force (on segment i, between stations i and i + 1) beyond stations 0..i; a self-contact pair
+    pushes its first segment and pulls the second the other way."""
     h = props.segment_length
     nodes = centerline(state.frames, clamps.start_point, h)
     a_kinds, a_first, a_second, _ = model.pairs(nodes, model.activation)
@@ -144,7 +148,7 @@ def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, stat
             gap=active_gaps[mine], force=force, total_force=force.sum(axis=0),
             length_in_contact=float(sum(part.length for part in carried)), carried=tuple(carried),
             touchdowns=tuple(touchdowns)))
-    return reports
+    return reports, beyond
 
 
 def _internal_force(props: RodProperties, clamps: Clamps, state: RodState) -> np.ndarray:
@@ -159,25 +163,12 @@ def _internal_force(props: RodProperties, clamps: Clamps, state: RodState) -> np
 
 def _forces_beyond(segments: int, kinds, first, second, forces) -> np.ndarray:
     """(N+1, 3) N: the sum of the contact forces (of the pairs kinds, first, second) on the part of the hose
-    beyond each station (see contact_forces_beyond)."""
+    beyond each station (see contact_reports)."""
     acting = np.zeros((segments + 2, 3))  # at index m: the forces that act beyond the stations before m
     np.add.at(acting, np.where(np.isin(kinds, STATION_KINDS), first, first + 1), forces)
     self_pairs = kinds == SEGMENT_SEGMENT
     np.add.at(acting, second[self_pairs] + 1, -forces[self_pairs])
     return np.cumsum(acting[::-1], axis=0)[::-1][1:]
-
-
-def contact_forces_beyond(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> np.ndarray:
-    """(N+1, 3) N: the sum of the contact forces on the part of the hose beyond each station.
-
-    A station's force (station-plane, station-triangle) at station k acts beyond the stations before k; a segment's force (on segment
-    i, between stations i and i + 1) beyond stations 0..i; a self-contact pair pushes its first segment
-    and pulls the second the other way."""
-    h = props.segment_length
-    nodes = centerline(state.frames, clamps.start_point, h)
-    kinds, first, second, _ = model.pairs(nodes, model.activation)
-    forces = model.terms(nodes, model.stiffness * h, kinds, first, second)[3]
-    return _forces_beyond(props.segments, kinds, first, second, forces)
 
 
 def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:
@@ -198,13 +189,13 @@ def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: Ro
     mount's reaction) with the contact loads, the stability margin with the barrier.  Raises PlacementError if
     the hose enters anything (a smallest gap below zero): the solver's guarantee failed."""
     problem = result.problem
-    result.contacts = contact_reports(problem, props, clamps, state, model)
+    result.contacts, beyond = contact_reports(problem, props, clamps, state, model)
     gaps = [contact.min_gap for contact in result.contacts]
     if gaps and min(gaps) < 0.0:
         worst = result.contacts[int(np.argmin(gaps))]
         raise PlacementError(f"placement with contact: the converged shape enters {worst.name!r} by {-worst.min_gap:.3g} mm; "
                              "this is a solver error, please report it with the problem file")
-    result.internal_force = result.internal_force + contact_forces_beyond(props, clamps, state, model)
+    result.internal_force = result.internal_force + beyond
     result.start_force = -result.internal_force[0]
     result.stability_margin = stability_margin_with_contact(props, clamps, state, model)
     return result

@@ -46,7 +46,7 @@ from hoseline.model.mounts import Mount, single_plane_offset
 from hoseline.model.sweep import SweepProblem
 from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact
 from hoseline.procedures.contact.moving import MovingObstacles, ObstaclePath, PlacedObstacles
-from hoseline.procedures.contact.placement import contact_forces_beyond, contact_reports, problem_contact_model
+from hoseline.procedures.contact.placement import contact_reports, problem_contact_model
 from hoseline.procedures.geometry.clearance import TriangleIndex, nearest_with_fittings
 from hoseline.procedures.placement.continuation import (
     ContinuationLog,
@@ -304,8 +304,8 @@ def _run_sweep(sweep: SweepProblem, progress: Progress | None, equilibria: list 
         mounts[:, k] = _mount_geometry(reached.clamps)
         health.append(hose_health(tracker.props, reached.clamps, reached.state, problem.hose.outer_radius))
         if reached.contact is not None:
-            touching.append(_contacts_at(k, tracker, reached))
-            beyond = contact_forces_beyond(tracker.props, reached.clamps, reached.state, reached.contact)
+            reports, beyond = _contacts_at(k, tracker, reached)
+            touching.append(reports)
             health[-1] = replace(health[-1], start_force=health[-1].start_force - beyond[0])
         iterations[k] = reached.iterations
         if reached.events:
@@ -370,15 +370,16 @@ def _run_sweep(sweep: SweepProblem, progress: Progress | None, equilibria: list 
     )
 
 
-def _contacts_at(index: int, tracker: _Tracker, reached: _Reached) -> list:
-    """The contact reports (procedures/contact/placement.contact_reports) at pose `index`; PlacementError if the
-    hose enters anything there (the contact solver's guarantee failed)."""
-    reports = contact_reports(tracker.sweep.problem, tracker.props, reached.clamps, reached.state, reached.contact)
+def _contacts_at(index: int, tracker: _Tracker, reached: _Reached) -> tuple[list, np.ndarray]:
+    """The contact reports and the contact forces beyond each station (procedures/contact/placement.contact_reports)
+    at pose `index`; PlacementError if the hose enters anything there (the contact solver's guarantee failed)."""
+    reports, beyond = contact_reports(tracker.sweep.problem, tracker.props, reached.clamps, reached.state,
+                                      reached.contact)
     worst = min(reports, key=lambda report: report.min_gap)
     if worst.min_gap < 0.0:
         raise PlacementError(f"sweep with contact: at pose {index} the hose enters {worst.name!r} by "
                              f"{-worst.min_gap:.3g} mm; this is a solver error, please report it with the sweep file")
-    return reports
+    return reports, beyond
 
 
 def _per_obstacle(touching: list) -> list[SweepContact]:
