@@ -154,6 +154,13 @@ def print_lengths(problem) -> None:
                     f"{fittings.overall_length(problem.hose.length):.2f} mm (the fittings add {parts} mm)")
 
 
+def _where(contact) -> str:
+    """Where an obstacle's smallest gap is, for the contact line: " (on the start fitting, s = -12.0 mm)"."""
+    if not np.isfinite(contact.min_gap_arc_length):
+        return ""
+    return f" (on the {contact.min_gap_on}, s = {contact.min_gap_arc_length:.1f} mm)"
+
+
 def print_contacts(result) -> None:
     """One line per obstacle of a placement with contact: the total force (N), the length the hose lies on and its
     distributed force, the point forces (N) at the touch-downs and point contacts (arc length, mm), the smallest gap;
@@ -165,7 +172,7 @@ def print_contacts(result) -> None:
         points = [f"{float(np.linalg.norm(t.force)):.4g} N at s = {t.arc_length:.1f} mm" for t in contact.touchdowns]
         carried = "; ".join(lying + ([f"point force(s) {', '.join(points)}"] if points else [])) or "not touching"
         Console().print(f"contact with {what}: force {float(np.linalg.norm(contact.total_force)):.4g} N, {carried}; "
-                        f"smallest gap {contact.min_gap:.3g} mm", soft_wrap=True)
+                        f"smallest gap {contact.min_gap:.3g} mm{_where(contact)}", soft_wrap=True)
     for choice in result.obstacle_placement:
         if choice.rule != "clear":
             given_up = f", {choice.ways_failed} shorter way(s) given up" if choice.ways_failed else ""

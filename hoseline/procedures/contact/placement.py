@@ -28,6 +28,7 @@ from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.model.problem import Problem
 from hoseline.procedures.contact.extent import carried_extent, free_hose
 from hoseline.procedures.contact.model import bend_length, contact_model, reference_pressure
+from hoseline.procedures.contact.nearest import nearest_gaps
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.result import ObstacleContact, Result
 
@@ -186,8 +187,9 @@ def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: R
 
 def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> Result:
     """The Result of a placement with contact completed: contacts per obstacle, the internal force (and the start
-    mount's reaction) with the contact loads, the stability margin with the barrier.  Raises PlacementError if
-    the hose enters anything (a smallest gap below zero): the solver's guarantee failed."""
+    mount's reaction) with the contact loads, the stability margin with the barrier, each obstacle's smallest gap
+    to the whole assembly and where it is (contact/nearest.py).  Raises PlacementError if the hose enters anything
+    (a smallest gap below zero): the solver's guarantee failed."""
     problem = result.problem
     result.contacts, beyond = contact_reports(problem, props, clamps, state, model)
     gaps = [contact.min_gap for contact in result.contacts]
@@ -195,6 +197,12 @@ def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: Ro
         worst = result.contacts[int(np.argmin(gaps))]
         raise PlacementError(f"placement with contact: the converged shape enters {worst.name!r} by {-worst.min_gap:.3g} mm; "
                              "this is a solver error, please report it with the problem file")
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    nearest = nearest_gaps(problem, model, nodes)  # the whole assembly: fittings and the start station too
+    result.contacts = [contact if contact.name not in nearest else
+                       replace(contact, min_gap=min(contact.min_gap, nearest[contact.name].gap),
+                               min_gap_on=nearest[contact.name].on, min_gap_arc_length=nearest[contact.name].arc_length)
+                       for contact in result.contacts]
     result.internal_force = result.internal_force + beyond
     result.start_force = -result.internal_force[0]
     result.stability_margin = stability_margin_with_contact(props, clamps, state, model)

@@ -8,6 +8,7 @@ at the segment midpoints.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -122,7 +123,11 @@ class ObstacleContact:
     """Where and how hard the hose presses on one obstacle (or on itself, name "self") at equilibrium.
 
     name, kind: as in the problem ("plane", "sphere", "cylinder", "box", "mesh"; "self" for self-contact).
-    min_gap: smallest gap between the hose surface and the obstacle, mm (>= 0; inf if never near).
+    min_gap: smallest gap between the assembly's surface (the hose and its end fittings) and the obstacle, mm
+    (>= 0 for the hose, which is kept out; negative where a rigid end fitting enters it; inf if never near);
+    min_gap_on: where it is, "hose", "start fitting" or "end fitting"; min_gap_arc_length: mm along the assembly
+    from the start outlet, at the middle of the nearest segment (negative on the start fitting, beyond the hose
+    length on the end fitting; nan if not located, as in a sweep's pose reports, which give the hose's gap).
     The barrier's pairs, one row per pair with a gap below the barrier's activation distance d_hat (the
     barrier's reach, which spreads a touch-down's point force over the stations next to it, see
     docs/model.md Contact): arc_length (k,) mm of the hose point from the start fitting; point (k, 3) mm on
@@ -147,11 +152,15 @@ class ObstacleContact:
     length_in_contact: float
     carried: tuple[CarriedArc, ...] = ()
     touchdowns: tuple[Touchdown, ...] = ()
+    min_gap_on: str = "hose"
+    min_gap_arc_length: float = math.nan
 
     def summary(self) -> dict:
         """For result.json (user units); "points" are the barrier's pairs."""
         return {"name": self.name, "kind": self.kind,
                 "min_gap_mm": None if not np.isfinite(self.min_gap) else float(self.min_gap),
+                "min_gap_on": self.min_gap_on,
+                "min_gap_arc_length_mm": None if not np.isfinite(self.min_gap_arc_length) else float(self.min_gap_arc_length),
                 "total_force_N": self.total_force.tolist(), "length_in_contact_mm": float(self.length_in_contact),
                 "carried_arcs": [arc.summary() for arc in self.carried],
                 "touchdowns": [touchdown.summary() for touchdown in self.touchdowns],
