@@ -1,6 +1,7 @@
 """`hoseline compare` and `hoseline calibrate`: files written, exit codes, nothing written on errors."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 from typer.testing import CliRunner
@@ -55,6 +56,23 @@ def test_check_exits_5_when_a_limit_is_exceeded(tmp_path):
                        "--check", "--quiet")
     assert code == common.CHECK_FAILED
     assert (tmp_path / "o" / "report.html").is_file()  # the report is written all the same
+
+
+def test_check_exits_5_for_a_hose_1_percent_short_that_the_thesis_limit_passes(tmp_path):
+    # the scan's own noise (its stations' uncertainty) and the model's discretisation cannot explain the deviation
+    problem, scans = files(tmp_path)
+    short = brake_hose(segments=24)
+    short_file = tmp_path / "short.toml"
+    short_file.write_text(problem_to_toml(replace(short, hose=replace(short.hose, length=0.99 * short.hose.length))))
+    code, output = run("compare", short_file, scans[1], "--twist", 180, "-o", tmp_path / "o", "--check")
+    assert code == common.CHECK_FAILED, output
+    document = json.loads((tmp_path / "o" / "validation.json").read_text())
+    (comparison,) = document["comparisons"]
+    assert comparison["within_limits"] and not comparison["explained_by_noise"]  # 6 mm allowed at 180 deg
+    assert comparison["deviation"]["mean_mm"] > 2.0 * comparison["noise_allowance_mm"]
+    assert "FAIL" in output and "noise" in output
+    code, output = run("compare", short_file, scans[1], "--twist", 180, "-o", tmp_path / "p", "--check", "--limits-only")
+    assert code == 0, output
 
 
 def test_bad_inputs_exit_2_and_write_nothing(tmp_path):

@@ -19,8 +19,8 @@ from rich.text import Text
 from hoseline.commands.common import (BAD_INPUT, CHECK_FAILED, OUT_HELP, QUIET_HELP, compile_solver,
                                       errors_to_exit_codes, fail)
 from hoseline.commands.compare import _limit
-from hoseline.commands.scan_inputs import (SCANS_HELP, TWIST_HELP, deviation_table, fitted, load_problem_file,
-                                           load_scan, placed, scan_twists)
+from hoseline.commands.scan_inputs import (NOISE_HELP, SCANS_HELP, TWIST_HELP, deviation_table, fitted,
+                                           load_problem_file, load_scan, placed, scan_twists)
 from hoseline.procedures.scans.parameters import PARAMETERS
 
 
@@ -35,7 +35,9 @@ def calibrate_command(
                                                              "untwisted, 6 mm twisted)"),
     max_deviation: float = typer.Option(None, "--max-deviation", help="largest deviation allowed, mm (default: none)"),
     check: bool = typer.Option(False, "--check",
-                               help=f"exit with {CHECK_FAILED} when the calibrated model misses a scan's limits"),
+                               help=f"exit with {CHECK_FAILED} when the calibrated model misses a scan's limits, "
+                                    "or deviates by more than the scan's noise and the discretisation explain"),
+    noise_check: bool = typer.Option(True, "--noise-check/--limits-only", help=NOISE_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
 ) -> None:
     """Fit stiffness (and optionally weight, length) to scans at several twists; write the report and calibrated.toml.
@@ -51,7 +53,7 @@ def calibrate_command(
     poisson_ratio = _poisson_ratio(problem_file)
     twists = scan_twists(twist, len(scans), problem)
     max_mean, max_deviation = _limit(max_mean, "--max-mean"), _limit(max_deviation, "--max-deviation")
-    limits = [Thresholds(Thresholds.thesis(angle).mean if max_mean is None else max_mean, max_deviation)
+    limits = [Thresholds(Thresholds.thesis(angle).mean if max_mean is None else max_mean, max_deviation, noise_check)
               for angle in twists]
     names = [name.strip() for name in fit.split(",") if name.strip()]
     unknown = [name for name in names if name not in PARAMETERS]

@@ -14,8 +14,8 @@ from rich.console import Console
 
 from hoseline.commands.common import (BAD_INPUT, CHECK_FAILED, OUT_HELP, QUIET_HELP, compile_solver,
                                       errors_to_exit_codes, fail)
-from hoseline.commands.scan_inputs import (SCANS_HELP, TWIST_HELP, deviation_table, fitted, load_problem_file,
-                                           load_scan, placed, scan_twists)
+from hoseline.commands.scan_inputs import (NOISE_HELP, SCANS_HELP, TWIST_HELP, deviation_table, fitted,
+                                           load_problem_file, load_scan, placed, scan_twists)
 
 
 def compare_command(
@@ -28,7 +28,10 @@ def compare_command(
     max_deviation: float = typer.Option(None, "--max-deviation", help="largest deviation allowed, mm (default: none)"),
     reference_points: Path = typer.Option(None, "--reference-points",
                                           help="text file of points x y z (mm) whose distance to the model is listed"),
-    check: bool = typer.Option(False, "--check", help=f"exit with {CHECK_FAILED} when a scan fails its limits"),
+    check: bool = typer.Option(False, "--check", help=f"exit with {CHECK_FAILED} when a scan fails its limits, or "
+                                                       "deviates by more than its own noise and the model's "
+                                                       "discretisation explain"),
+    noise_check: bool = typer.Option(True, "--noise-check/--limits-only", help=NOISE_HELP),
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
 ) -> None:
     """Compare the placed model with scans: deviation table and plot, 3D overlay, scatter of repeated scans."""
@@ -47,7 +50,8 @@ def compare_command(
         results = placed(problem, twists)
         comparisons = []
         for path, cloud, angle, f in zip(scans, clouds, twists, fits):
-            limits = Thresholds(Thresholds.thesis(angle).mean if max_mean is None else max_mean, max_deviation)
+            limits = Thresholds(Thresholds.thesis(angle).mean if max_mean is None else max_mean, max_deviation,
+                                noise_check)
             comparisons.append(compare_scan(results[angle], cloud, path.stem, fit=f, thresholds=limits,
                                             reference_points=references))
         write_validation_report(out, comparisons, envelope=_envelope(comparisons, twists))

@@ -14,6 +14,8 @@ from rich.table import Table
 from hoseline.commands.common import BAD_INPUT, fail, read_input
 
 SCANS_HELP = "point clouds of the hose in the problem's mounts: .ply, .stl or text x y z (.xyz, .csv, .txt), mm"
+NOISE_HELP = ("judge by what the scan's own noise and the model's discretisation explain as well as by the limits "
+              "(default), or by the limits alone")
 TWIST_HELP = "twist of the end fitting for each scan, degrees (once per scan, or once for all; default: the problem's)"
 
 
@@ -65,11 +67,11 @@ def placed(problem, twists: list[float]) -> dict:
 def deviation_table(comparisons) -> Table:
     """The deviation of each scan Comparison as a Rich table."""
     table = Table(title="deviation of the scan centreline from the model (mm)")
-    for column in ("scan", "twist", "stations", "mean", "RMS", "max", "at s", "limit", "verdict"):
+    for column in ("scan", "twist", "stations", "mean", "RMS", "max", "at s", "limit", "noise allows", "verdict"):
         table.add_column(column, justify="right")
     for c in comparisons:
         d = c.deviation
         table.add_row(c.label, f"{c.result.problem.end_twist_deg:g}", str(d.distance.size), f"{d.mean:.3f}",
                       f"{d.rms:.3f}", f"{d.max:.3f}", f"{d.s_at_max:.1f}", f"{c.thresholds.mean:g}",
-                      "PASS" if c.passed else "FAIL")
+                      f"{c.noise_allowance:.3f}", c.verdict)
     return table

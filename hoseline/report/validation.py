@@ -184,10 +184,10 @@ def _html(comparisons, envelope, calibration, twist_paths, png: bytes, twist_png
     name = comparisons[0].result.problem.name if comparisons else "hose"
     parts = [f"<h1>hoseline validation: {html.escape(name)}</h1>", "<h2>Deviation of the scan from the model</h2>",
              _table(["scan", "twist [deg]", "stations", "mean [mm]", "RMS [mm]", "max [mm]", "at s [mm]",
-                     "mean limit [mm]", "verdict", "radius [mm]", "outliers", "gaps [mm]"],
+                     "mean limit [mm]", "noise allows [mm]", "verdict", "radius [mm]", "outliers", "gaps [mm]"],
                     [[c.label, f"{c.result.problem.end_twist_deg:g}", c.deviation.distance.size, f"{c.deviation.mean:.3f}",
                       f"{c.deviation.rms:.3f}", f"{c.deviation.max:.3f}", f"{c.deviation.s_at_max:.1f}",
-                      f"{c.thresholds.mean:g}", "PASS" if c.passed else "FAIL",
+                      f"{c.thresholds.mean:g}", f"{c.noise_allowance:.3f}", c.verdict,
                       f"{c.fit.radius_median:.3f} ± {c.fit.radius_scatter:.3f}", c.fit.outliers,
                       "; ".join(f"{a:.0f}-{b:.0f}" for a, b in c.fit.gaps) or "none"] for c in comparisons])]
     references = [c for c in comparisons if c.reference is not None]

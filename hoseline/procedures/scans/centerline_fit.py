@@ -65,7 +65,9 @@ class CenterlineFit:
     radius: (m,) fitted radius per section; radius_fitted: False where it was fixed (low coverage).
     coverage_deg: (m,) arc of the circumference the section's points cover.
     point_count: (m,) surface points per section.  rms: (m,) fit residual per section (of the
-    voxel centroids: the scanner's noise within a voxel is averaged out).
+    voxel centroids: the scanner's noise within a voxel is averaged out).  axis_sigma: (m,) the
+    standard uncertainty of each station's axis point in one direction of its cross-section, from the
+    scan's own noise (cylinder_fit._axis_sigma).
     gaps: (from, to) arc-length ranges along the guide with no scan points (longer than a radius).
     outliers: points dropped as isolated.
     """
@@ -78,6 +80,7 @@ class CenterlineFit:
     coverage_deg: np.ndarray
     point_count: np.ndarray
     rms: np.ndarray
+    axis_sigma: np.ndarray
     gaps: list[tuple[float, float]] = field(default_factory=list)
     outliers: int = 0
 
@@ -295,6 +298,7 @@ def _fit_sections(cloud: VoxelCloud, guide: np.ndarray, radius: float, section: 
         coverage_deg=np.array([f["coverage"] for _, f in fits]),
         point_count=np.array([int(f["weights"].sum()) for _, f in fits]),
         rms=np.array([f["rms"] for _, f in fits]),
+        axis_sigma=np.array([f["axis_sigma"] for _, f in fits]),
         gaps=gaps,
     )
 

@@ -83,8 +83,8 @@ def fit_cylinder(points, weights, centre, tangent, radius, free_radius=True) -> 
     radius, mm.  Returns the points and weights, the axis point in the station's cross-section,
     the unit axis direction there, the radius and whether it was fitted (not where the points
     cover less than MIN_ARC_FOR_RADIUS_DEG of the circumference, or the fit left 0.5-2 times the
-    nominal), the covered arc (degrees) and the weighted RMS residual (of voxel centroids: the
-    scanner noise is averaged within each voxel).
+    nominal), the covered arc (degrees), the weighted RMS residual (of voxel centroids: the
+    scanner noise is averaged within each voxel) and the axis point's standard uncertainty (axis_sigma, mm).
     """
     weights = np.asarray(weights, dtype=float)
     cylinder = BentCylinder(points, centre, tangent, None if free_radius else radius)
@@ -104,6 +104,7 @@ def fit_cylinder(points, weights, centre, tangent, radius, free_radius=True) -> 
     largest_gap = np.max(np.diff(np.concatenate([angles, angles[:1] + 2.0 * np.pi])))
     coverage = np.degrees(2.0 * np.pi - largest_gap)
     fitted_radius = solution.x[6] if free_radius else radius
+    rms = float(np.sqrt(np.sum(weights * solution.fun**2) / np.sum(weights)))
     if free_radius and (coverage < MIN_ARC_FOR_RADIUS_DEG or not 0.5 * radius < fitted_radius < 2.0 * radius):
         free_radius = False  # refitted with the median radius of the well-covered sections
     return {
@@ -114,5 +115,20 @@ def fit_cylinder(points, weights, centre, tangent, radius, free_radius=True) -> 
         "radius": float(fitted_radius),
         "radius_fitted": free_radius,
         "coverage": float(coverage),
-        "rms": float(np.sqrt(np.sum(weights * solution.fun**2) / np.sum(weights))),
+        "rms": rms,
+        "axis_sigma": _axis_sigma(cylinder.jacobian(solution.x), weights, rms),
     }
+
+
+def _axis_sigma(jacobian: np.ndarray, weights: np.ndarray, rms: float) -> float:
+    """The standard uncertainty (mm) of the fitted axis point in one direction of its cross-section: the square root
+    of the mean of the two diagonal terms of its covariance, rms^2 (J^T W J)^-1, with the residuals' weighted RMS
+    (mm) for the noise of one scan point and W the points each entry stands for (a voxel centroid averages its
+    points' noise).  The least-squares covariance with every parameter free (tilt, curvature and radius too), so a
+    one-sided section, whose axis is less determined, gets a larger one."""
+    information = jacobian.T @ (weights[:, None] * jacobian)
+    try:
+        covariance = rms**2 * np.linalg.inv(information)
+    except np.linalg.LinAlgError:
+        return float("inf")
+    return float(np.sqrt(max(0.5 * (covariance[0, 0] + covariance[1, 1]), 0.0)))

@@ -44,10 +44,13 @@ def closest_on_polyline(points: np.ndarray, polyline: np.ndarray) -> tuple[np.nd
 
 @dataclass(frozen=True)
 class Thresholds:
-    """Acceptance limits of a comparison, mm: the mean deviation, and optionally the largest."""
+    """Acceptance limits of a comparison, mm: the mean deviation, and optionally the largest; noise: also require
+    the mean deviation to be within what the scan's own noise and the model's discretisation explain
+    (validation.Comparison.noise_allowance)."""
 
     mean: float
     max: float | None = None
+    noise: bool = True
 
     @classmethod
     def thesis(cls, twist_deg: float) -> "Thresholds":
