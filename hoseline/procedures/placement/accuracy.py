@@ -37,6 +37,14 @@ def coarse_segments(segments: int, minimum: int) -> int:
     return max(minimum, segments // 2)
 
 
+def coarse_guess(fine: RodProperties, coarse: RodProperties, state: RodState) -> RodState:
+    """A first guess of the coarse rod's equilibrium from the fine one's `state`: each coarse segment takes the frame
+    of the fine segment at its middle; the end force and the end roll as they are."""
+    midpoints = (np.arange(coarse.segments) + 0.5) * coarse.segment_length
+    nearest = np.minimum((midpoints / fine.segment_length).astype(int), fine.segments - 1)
+    return RodState(state.frames[nearest].copy(), state.end_force.copy(), state.roll)
+
+
 def richardson_error(fine: RodProperties, coarse: RodProperties, clamps: Clamps, state: RodState,
                      tolerance: float, fine_clamps: Clamps | None = None) -> float | None:
     """Estimated largest station error of the fine equilibrium `state`, mm; None if the coarse
@@ -48,9 +56,7 @@ def richardson_error(fine: RodProperties, coarse: RodProperties, clamps: Clamps,
     """
     if coarse.segments >= fine.segments:
         return None
-    midpoints = (np.arange(coarse.segments) + 0.5) * coarse.segment_length
-    nearest = np.minimum((midpoints / fine.segment_length).astype(int), fine.segments - 1)
-    guess = RodState(state.frames[nearest].copy(), state.end_force.copy(), 0.0)
+    guess = coarse_guess(fine, coarse, state)
     if clamps.clips:  # sliding clips start where the fine solve found them
         guess.clip_arc_lengths = state.clip_arc_lengths.copy()
     coarse_state, report = solve_equilibrium(coarse, clamps, guess, tolerance=tolerance)

@@ -13,6 +13,10 @@ from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.sequence import solve
 
 SAFETY = 1.2  # the count predicted from the error law, made this much larger
+# The error estimate is an estimate: against independent Kirchhoff solutions (tests/test_accuracy_references.py,
+# five cases at 20, 40 and 100 segments) the true error was up to 1.9 % above it (before the coarse rod found its own
+# lock angle, up to 5.7 %, and 67 % on a non-coplanar hose).  An accuracy is met when the estimate times this margin is.
+ESTIMATE_MARGIN = 1.25
 FEWEST_SEGMENTS = 10  # no fewer when the estimate asks for fewer: a coarse rod's estimate is itself rough
 MOST_SEGMENTS = 5000
 ROUNDS = 4
@@ -20,7 +24,8 @@ ROUNDS = 4
 
 def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress | None = None,
                       control: StepControl = StepControl()) -> Result:
-    """Place the hose with a segment count whose estimated largest station error is at most `accuracy` (mm).
+    """Place the hose with a segment count whose estimated largest station error, times ESTIMATE_MARGIN, is at most
+    `accuracy` (mm).
 
     Starts from the problem's segment count; each round predicts the count from the error law
     (error ~ 1/N^2, with contact 1/N plus the barrier's standoff, which more segments do not remove: accuracy.py)
@@ -41,11 +46,12 @@ def solve_to_accuracy(problem: Problem, accuracy: float, *, progress: Progress |
         if error is None:
             raise PlacementError(f"the discretisation error at {segments} segments could not be estimated (the solve "
                                  "with half the segments did not reach a stable equilibrium); give hose.segments instead")
-        if error <= accuracy:
-            result.events.append(f"accuracy: {segments} segments, estimated station error {error:.3g} mm "
-                                 f"<= {accuracy:g} mm asked for")
+        if error * ESTIMATE_MARGIN <= accuracy:
+            result.events.append(f"accuracy: {segments} segments, estimated station error {error:.3g} mm, with the "
+                                 f"estimate's margin ({ESTIMATE_MARGIN:g}x) {error * ESTIMATE_MARGIN:.3g} mm <= "
+                                 f"{accuracy:g} mm asked for")
             return result
-        needed = math.ceil(segments * (error / accuracy) ** (1.0 / order) * SAFETY)
+        needed = math.ceil(segments * (error * ESTIMATE_MARGIN / accuracy) ** (1.0 / order) * SAFETY)
         if needed > MOST_SEGMENTS:
             raise PlacementError(f"an accuracy of {accuracy:g} mm needs about {needed} segments (estimated error "
                                  f"{error:.3g} mm at {segments}), more than {MOST_SEGMENTS}: ask for less accuracy")
