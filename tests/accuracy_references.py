@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 from kirchhoff_bvp import KirchhoffRod, end_frame, guess_from_result
 from scipy.spatial.transform import Rotation
-from validation_cases import EI, brake_hose
+from validation_cases import brake_hose
 
 from hoseline import Hose, Mount, Problem, solve
 from hoseline.model.hose import isotropic_torsional_stiffness
