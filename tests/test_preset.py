@@ -118,6 +118,19 @@ def test_u_bend_moves_to_the_side_of_the_set():
     assert np.allclose(up, down * [1.0, 1.0, -1.0], atol=1e-6)  # the mirror image
 
 
+@pytest.mark.parametrize("direction, d1", [((0.0, 1.0, 0.0), (1.0, 0.0, 0.0)), ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0)),
+                                           ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))])
+def test_the_set_reference_ties_go_to_the_first_axis_and_survive_cad_rounding(direction, d1):
+    # axis-aligned mounts tie between two world axes: the first of x, y, z is d1, also after rounding of a CAD direction
+    assert np.allclose(frame_from_tangent(direction)[0], d1)
+    rounded = np.array(direction) + np.array([2e-16, 1e-16, 1e-16]) * (np.array(direction) == 0.0)
+    assert np.allclose(frame_from_tangent(rounded)[0], d1)
+    hose = preset_hose(Preset(1.0 / 150.0, 90.0), 40)
+    exact, off = (solve(Problem(hose, Mount([0.0, 0.0, 0.0], start), Mount([100.0, 0.0, 0.0], [0.0, 1.0, 0.0]), 0.0),
+                        estimate_error=False).centerline for start in ([0.0, 1.0, 0.0], [1e-16, 1.0, 0.0]))
+    assert np.allclose(exact, off, atol=1e-6)  # the set's side does not turn by 90 degrees
+
+
 def test_a_set_in_the_plane_of_a_u_bend_leaves_it_unchanged_as_segments_shrink():
     """Continuum: for a planar clamped shape the set adds -EI kappa0 int kappa ds, fixed by the end tangents, so the
     shape does not change.  The discrete rest rotations match (kappa - kappa0)^2 to O(h^2): the change falls as h^2."""

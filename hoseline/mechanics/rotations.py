@@ -12,6 +12,8 @@ import math
 import numpy as np
 from numba import njit
 
+AXIS_TIE = 1e-9  # direction components closer than this to the smallest are tied (frame_from_tangent)
+
 
 @njit(cache=True)
 def _rotation_entries(vx, vy, vz):
@@ -105,11 +107,15 @@ def frame_from_tangent(tangent: np.ndarray) -> np.ndarray:
 
     d1 is the world axis least aligned with the tangent, made perpendicular to it;
     a deterministic choice so that a problem always starts from the same material frame.
+    Ties, common for axis-aligned CAD mounts, go to the first of x, y, z, and components within
+    AXIS_TIE of the smallest count as tied, so that CAD rounding (a direction (1e-16, 1, 0)) does
+    not turn d1 by 90 degrees: start direction +y or -y: d1 = +x; +x or -x: d1 = +y; +z or -z: d1 = +x.
     """
     t = np.asarray(tangent, dtype=float)
     t = t / np.linalg.norm(t)
     axis = np.zeros(3)
-    axis[int(np.argmin(np.abs(t)))] = 1.0
+    size = np.abs(t)
+    axis[int(np.flatnonzero(size <= size.min() + AXIS_TIE)[0])] = 1.0
     d1 = axis - np.dot(axis, t) * t
     d1 /= np.linalg.norm(d1)
     d2 = np.cross(t, d1)

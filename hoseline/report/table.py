@@ -21,7 +21,9 @@ def _fixed(value: float | None, decimals: int = 2) -> str:
 
 
 def _uniqueness(result: Result) -> str:
-    """yes, or no with what else the hose can do."""
+    """yes, not checked with why, or no with what else the hose can do."""
+    if result.unique is None:
+        return f"not checked: {result.unchecked}"
     if result.unique:
         return "yes"
     if not result.other_equilibria:

@@ -118,6 +118,11 @@ class CarriedArc:
                 "distributed_force_N": self.distributed_force.tolist()}
 
 
+def uniqueness_word(unique: bool | None) -> str:
+    """"yes", "no" or "not checked" for Result.unique."""
+    return "not checked" if unique is None else ("yes" if unique else "no")
+
+
 @dataclass(frozen=True)
 class ObstacleContact:
     """Where and how hard the hose presses on one obstacle (or on itself, name "self") at equilibrium.
@@ -203,8 +208,11 @@ class Result:
     iterations: Newton iterations in total; steps: continuation steps in total.
     wall_time: seconds for the whole placement.
     unique: True when no other stable equilibrium was found at the same mounts, length and twist:
-        none at the mounts' symmetry images and none at the end of the branches not taken at
-        forks of the path; False also for a neutral margin (a continuous family of shapes).
+        none at the mounts' symmetry images, none with the end fitting turned the other way round
+        (at a twist of half a turn or more) and none at the end of the branches not taken at forks
+        of the path; False also for a neutral margin (a continuous family of shapes); None ("not
+        checked") when one of those could not be followed to the end, so the answer is not known.
+    unchecked: why unique is None: the candidates that could not be followed ("" otherwise).
     other_equilibria: the other stable equilibria found (OtherEquilibrium: origin, distance, energy).
     path_forks: the forks met along the placement path, whether or not their branches meet again.
     alternatives: the other stable equilibria as Results, when asked for.
@@ -247,7 +255,8 @@ class Result:
     steps: int
     wall_time: float
     residual: float
-    unique: bool = True
+    unique: bool | None = True
+    unchecked: str = ""
     other_equilibria: list[OtherEquilibrium] = field(default_factory=list)
     path_forks: list[str] = field(default_factory=list)
     alternatives: list["Result"] = field(default_factory=list)
@@ -287,7 +296,9 @@ class Result:
             "gravity_energy_Nmm": self.gravity_energy,
             "stability_margin_N_per_rad2": float(self.stability_margin),
             "stable": bool(self.stable),
-            "unique": bool(self.unique),
+            "unique": None if self.unique is None else bool(self.unique),
+            "uniqueness": uniqueness_word(self.unique),
+            **({"uniqueness_not_checked": self.unchecked} if self.unique is None else {}),
             "other_equilibria": [other.summary() for other in self.other_equilibria],
             "path_forks": list(self.path_forks),
             "discretisation_error_mm": self.discretisation_error,

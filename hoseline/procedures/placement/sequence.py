@@ -62,7 +62,7 @@ from hoseline.procedures.contact.bring_in import BroughtIn, bring_in
 from hoseline.procedures.contact.cushion import follow_on_cushion
 from hoseline.mechanics.contact_motion import only
 from hoseline.mechanics.contact_newton import solve_with_contact
-from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, symmetric_images
+from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, other_way_round, symmetric_images
 
 __all__ = ["solve", "PlacementError", "rod_properties"]
 
@@ -245,6 +245,8 @@ def solve(
     else:
         result.events.append("uniqueness: with contact, the mounts' symmetry images are not checked (the obstacles "
                              "need not share the symmetry); the other branches of the first buckle are")
+    # after the images: where the mirror is the other way's shape, its origin says why
+    others += other_way_round(problem, sequence.twist_start, sequence.finish, others)
     others = judge_uniqueness(result, props, final, state, others, log.forks)
     if alternatives:
         result.alternatives = [
@@ -310,6 +312,7 @@ class _Sequence:
         self.place_props = replace(props, springs=None)  # stiffener springs come in once placed (stiffening.py)
         self.locked_frame: np.ndarray | None = None  # of the main run, for forks met while twisting
         self.locked_state: RodState | None = None  # the main run's equilibrium at the lock (end roll free)
+        self.twist_start: RodState | None = None  # the same with the roll locked: where the twist phase starts
         self.locked_clips: tuple[ClipHold, ...] = ()
         self.lock_angle_deg = 0.0
         self.contact = contact_placement.problem_contact_model(problem) if problem.has_contact else None
@@ -345,9 +348,11 @@ class _Sequence:
         return follow_on_cushion(phase, path, props, state, self.path_contact, start=fraction, control=control,
                                  log=log, progress=self.progress)
 
-    def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState):
-        """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`."""
+    def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None = None):
+        """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`, twisted
+        to twist_deg degrees (default the problem's)."""
         problem, props, control = self.problem, self.props, self.control
+        twist_deg = problem.end_twist_deg if twist_deg is None else twist_deg
         if phase == "place":
             place_path = self.path.place
             if self.path_contact is not None:
@@ -370,16 +375,16 @@ class _Sequence:
             fraction = 0.0
             if self.locked_frame is None:
                 self.locked_frame, self.lock_angle_deg, self.locked_clips = locked_frame, lock_angle_deg, locked_clips
-                self.locked_state = locked_state
+                self.locked_state, self.twist_start = locked_state, state
         elif phase == "twist":
             locked_frame, lock_angle_deg, locked_clips = self.locked_frame, self.lock_angle_deg, self.locked_clips
         else:
             raise ValueError(f"the placement cannot be resumed in phase {phase!r}")
 
         def twist_path(t: float) -> Clamps:
-            return self.path.twisted(locked_frame, problem.end_twist_deg * t, locked_clips)
+            return self.path.twisted(locked_frame, twist_deg * t, locked_clips)
 
-        twist = math.radians(problem.end_twist_deg)
+        twist = math.radians(twist_deg)
         if twist != 0.0 and fraction < 1.0:
             twist_control = replace(  # steps of at most 30 deg at first, 45 deg later
                 control,

@@ -1,12 +1,15 @@
 """Is the placed shape the only one?  Other stable equilibria at the same mounts, length and twist.
 
-Two sources, both checked by Newton at the final clamps:
+Three sources, each checked by Newton at the final clamps:
 - forks met along the placement path (continuation.Fork): the branches not taken are followed
   through the rest of the published sequence (rest of the place phase, lock, twist).  Where
   they meet the answer again the fork was a detour of the path, not a second answer; where they
   end elsewhere the user could get that shape too (e.g. by pushing the hose the other way);
 - the symmetry of the mounts (symmetry.py): the mirror image in their common plane, or the half
-  turn about their common axis, when it solves the same clamped problem and differs from the shape.
+  turn about their common axis, when it solves the same clamped problem and differs from the shape;
+- the end fitting turned the other way round to the same clamp, at a twist of half a turn or more.
+A candidate that cannot be followed to the end leaves the verdict "not checked" (Result.unique None),
+never "yes".
 
 The verdict (Result.unique) describes the final answer only; the forks met on the way are
 listed separately (Result.path_forks).
@@ -28,9 +31,10 @@ from hoseline.procedures.placement.result import OtherEquilibrium, Result
 from hoseline.procedures.placement.symmetry import equivalent_states
 
 DISTINCT = 1e-6  # of the length: shapes closer than this are the same equilibrium
+ANGLE_TOLERANCE_DEG = 1e-9  # a twist this close to half a turn counts as one
 BRANCHES_FOLLOWED = 3  # fork branches followed to the end at most (each costs about one placement)
 
-Finish = Callable[[ContinuationLog, str, float, RodState], tuple[Clamps, RodState, float, float]]
+Finish = Callable[..., tuple[Clamps, RodState, float, float]]  # (log, phase, fraction, state[, twist_deg])
 
 
 @dataclass
@@ -41,6 +45,7 @@ class Candidate:
     clamps: Clamps | None
     state: RodState | None
     lock_angle_deg: float = 0.0
+    other_way: bool = False  # the shape of the end fitting turned the other way round (a mirror image at +-180 deg)
 
     @property
     def stable(self) -> bool:
@@ -48,14 +53,16 @@ class Candidate:
 
 
 def fork_branches(props: RodProperties, final: Clamps, state: RodState, forks: list[Fork], finish: Finish) -> list[Candidate]:
-    """The branches not taken at the forks of the path, each followed to the end of the sequence by `finish`."""
+    """The branches not taken at the forks of the path, each followed to the end of the sequence by `finish` (at most
+    BRANCHES_FOLLOWED; the others are returned as candidates not followed)."""
     candidates = []
     for fork in forks:
         for rank, other in enumerate(fork.others):
-            if len(candidates) == BRANCHES_FOLLOWED:
-                return candidates
             origin = (f"the other branch of the fork met in phase '{fork.phase}' at fraction {fork.fraction:.4f}"
                       f" ({fork.energy_gaps[rank]:.4g} N*mm above the branch taken there)")
+            if len(candidates) >= BRANCHES_FOLLOWED:
+                candidates.append(Candidate(f"{origin} was not followed (at most {BRANCHES_FOLLOWED} are)", None, None))
+                continue
             try:
                 clamps, end_state, lock_angle_deg, _ = finish(ContinuationLog(), fork.phase, fork.fraction, other)
             except (PlacementError, ValueError) as exc:
@@ -63,6 +70,28 @@ def fork_branches(props: RodProperties, final: Clamps, state: RodState, forks: l
                 continue
             candidates.append(Candidate(origin, clamps, end_state, lock_angle_deg))
     return candidates
+
+
+def other_way_round(problem: Problem, twist_start: RodState | None, finish: Finish,
+                    found: list[Candidate]) -> list[Candidate]:
+    """The placement twisted the other way round to the same clamp (twist - 360 deg, towards zero), when that turn is no
+    longer than the one asked (|twist| >= 180 deg): at half a turn both ways clamp the fitting identically and an
+    assembler may turn either way; a preset, springs or the obstacles can make the two shapes differ where the
+    mirror image, which shows it for a plain hose, does not exist.  A shorter twist's other way is a longer turn
+    than asked and is not tried.  twist_start: the equilibrium at the lock, the twist phase's start; `finish` follows
+    it (with its twist in degrees).  found: the candidates found so far; none is needed when the mirror image is among
+    them (it is the other way's shape, or the shape itself when that is symmetric)."""
+    twist = problem.end_twist_deg
+    if twist_start is None or abs(twist) < 180.0 - ANGLE_TOLERANCE_DEG or any(c.other_way for c in found):
+        return []
+    other = twist - math.copysign(360.0, twist)
+    origin = (f"the end fitting turned the other way round ({other:g} deg instead of {twist:g} deg): the same "
+              "clamp, and which shape a hose takes depends on the way its fitting was turned")
+    try:
+        clamps, end_state, lock_angle_deg, _ = finish(ContinuationLog(), "twist", 0.0, twist_start, other)
+    except (PlacementError, ValueError) as exc:
+        return [Candidate(f"{origin} could not be followed to the end: {exc}", None, None)]
+    return [Candidate(origin, clamps, end_state, lock_angle_deg)]
 
 
 def symmetric_images(problem: Problem, props: RodProperties, final: Clamps, state: RodState,
@@ -76,14 +105,15 @@ def symmetric_images(problem: Problem, props: RodProperties, final: Clamps, stat
             continue
         if not reflection:
             origin = "the half turn of this shape about the common axis of both mounts"
-        elif abs(abs(twist) - 180.0) < 1e-9:
+        elif abs(abs(twist) - 180.0) < ANGLE_TOLERANCE_DEG:
             origin = ("the mirror image of this shape in the mounts' common plane: the shape the hose takes when "
                       f"the end fitting is turned the other way ({-problem.end_twist_deg:g} deg instead of "
                       f"{problem.end_twist_deg:g} deg); both turns clamp the fitting identically, so it is the same "
                       "physical assembly, and which shape a hose takes depends on the way its fitting was turned")
         else:
             origin = "the mirror image of this shape in the mounts' common plane (mounts and gravity are symmetric about it)"
-        candidates.append(Candidate(origin, final, image, lock_angle_deg))
+        candidates.append(Candidate(origin, final, image, lock_angle_deg,
+                                    other_way=reflection and abs(abs(twist) - 180.0) < ANGLE_TOLERANCE_DEG))
     return candidates
 
 
@@ -95,9 +125,11 @@ def judge_uniqueness(result: Result, props: RodProperties, final: Clamps, state:
     seen = [node_positions(props, final, state)]
     distinct = []
     energy = total_energy(props, final, state)
+    unchecked = []
     for candidate in candidates:
         if not candidate.stable:
             result.events.append(f"uniqueness: {candidate.origin}")
+            unchecked.append(candidate.origin)
             continue
         nodes = node_positions(props, candidate.clamps, candidate.state)
         distances = [float(np.max(np.linalg.norm(nodes - other, axis=1))) for other in seen]
@@ -115,4 +147,6 @@ def judge_uniqueness(result: Result, props: RodProperties, final: Clamps, state:
         distinct.append(candidate)
         result.events.append(f"not unique: {other.describe()}")
     result.unique = result.stability_margin != 0.0 and not result.other_equilibria
+    if result.unique and unchecked:  # another shape may lie where the search could not go: not known
+        result.unique, result.unchecked = None, "; ".join(unchecked)
     return distinct

@@ -195,7 +195,8 @@ export class Panel {
     rows.push(['stability margin', `${fmt(r.stability_margin)} N/rad²`, r.stability_margin >= 0]);
     const comparison = state.comparison;
     const known = comparison && !comparison.failed;
-    rows.push(['unique (placement)', known ? (comparison.unique ? 'yes' : 'no: another stable shape exists') : 'not known', known ? comparison.unique : null]);
+    const checked = known && comparison.unique !== null;  // null: a search could not be followed, not known
+    rows.push(['unique (placement)', checked ? (comparison.unique ? 'yes' : 'no: another stable shape exists') : 'not checked', checked ? comparison.unique : null]);
     if (state.step) rows.push(['last step', `${state.step.iterations} Newton iterations, ${fmt(1000 * state.step.seconds, 2)} ms, moved ${fmt(state.step.movement, 3)} mm`, null]);
     const table = document.getElementById('readouts');
     table.replaceChildren(...rows.map(([name, value, ok]) => {
