@@ -16,9 +16,12 @@ reported as not identified by the scans, and so are those a fixed parameter woul
 than their uncertainty if freed, when it would remove most of the remaining misfit
 (_fixed_parameter_effects).
 
-Uncertainty.  Two parts in quadrature: the scatter, s^2 (J^T J)^-1 times the variance inflation
-of residuals correlated along the hose (scatter_inflation), and the discretisation, from one
-evaluation with twice the segments (_model_error).  Failures (a parameter at its bound, limits
+Discretisation.  The N-segment model's own error (_model_error, from one evaluation with twice the
+segments) moves the fit; the Gauss-Newton step that removes it is added to the fitted values, so they
+are the exact hose's (the plain rod only, whose order 2 the correction assumes: _order_two).  Uncertainty.  Two parts in quadrature: the scatter, s^2 (J^T J)^-1 of the
+corrected fit's residuals times their variance inflation along the hose (scatter_inflation: n
+stations carry the information of n / inflation independent ones), and (RICHARDSON_SEGMENTS / N)^2 of
+the discretisation correction (where it is not made, the whole step).  Failures (a parameter at its bound, limits
 missed, a flipped twist sign, a confounding fixed parameter) go to Calibration.warnings.
 The braid (braid_stiffness = n EA_s, N, the strand count kept; braid_slack = eps0) is fitted from
 the problem's [hose.braid] (it cannot start from no braid or no slack: both are scaled).  On the
@@ -50,6 +53,10 @@ UNIDENTIFIABLE_RELATIVE_STD = 0.25
 UNIDENTIFIABLE_ANGLE_STD_DEG = 15.0  # a preset angle less certain than this is not identified
 PRESET_BOUND = 4.0 * math.pi  # the preset's x (rad): the set's turn over the hose's length (two coils), or its angle
 LOG_BOUND = math.log(100.0)  # no parameter moves by more than 100x
+# What stays uncertain of the discretisation correction, as a fraction of it: (RICHARDSON_SEGMENTS / N)^2 at N
+# segments.  Measured on noise-free stations of a 384- and 768-segment hose: 0.35, 0.045, 0.011 at 24, 48, 96
+# segments (the correction's higher orders fall faster than h^2); (15 / N)^2 is 0.39, 0.098, 0.024 (docs/validation.md).
+RICHARDSON_SEGMENTS = 15.0
 PRESET_ANGLE_STARTS = (0.0, 90.0, 180.0, 270.0)  # deg from the initial angle: the starts of a fit of the set's angle
 AT_BOUND_LOG = 0.05  # a parameter within 5 % of its bound is reported as at the bound: the fit failed
 FLIPPED_BETTER = 0.25  # the fit with the twists negated is "much better" below this fraction of the cost
@@ -71,8 +78,10 @@ class FittedParameter:
     """A calibrated parameter: initial and fitted value, standard uncertainty (None if not identified).
 
     std = hypot(std_scatter, std_discretisation), in the parameter's unit: the scans' scatter
-    (stations correlated along the hose counted) and the model's discretisation error (4/3 of
-    the change a model of twice the segments makes).  note: why it is not identified.
+    (stations correlated along the hose counted) and what stays uncertain of the discretisation
+    correction ((RICHARDSON_SEGMENTS / N)^2 of it at N segments; the whole step where it is not made).
+    discretisation_correction: what the value was moved by for the N-segment model's own error (4/3 of the change
+    a model of twice the segments makes), so that it is the exact hose's; 0 where not made (_order_two).  note: why it is not identified.
     """
 
     name: str
@@ -84,6 +93,7 @@ class FittedParameter:
     note: str = ""
     std_scatter: float | None = None
     std_discretisation: float | None = None
+    discretisation_correction: float | None = None
 
 
 @dataclass
@@ -278,21 +288,30 @@ def calibrate(
     if not names:
         return Calibration([], problem.hose, before, before, notes, *fitter.solve_counts(), poisson_ratio=poisson_ratio)
     solution = fitter.fit(max_evaluations)
-    hose = fitter.hose_at(solution.x)
-    after = fitter.deviations(hose)
-    # each residual vector is normal to the model centreline (closest point): two degrees of freedom per station
-    inflation = scatter_inflation([row.reshape(-1, 3) for row in fitter.split(solution.fun)])
-    scatter_std = math.sqrt(inflation) * _relative_std(solution.jac, solution.fun, 2 * fitter.station_count)
+    fitter.deviations(fitter.hose_at(solution.x))  # the model's equilibria at the fit start the finer one
     model_error = _model_error(fitter, solution)
-    discretisation_std = _discretisation_std(solution, model_error)
+    # the N-segment model's discretisation moves the fit by a known amount: removed, not added as an uncertainty
+    step = _discretisation_step(solution, model_error)
+    corrects = _order_two(problem, names) and not any(fitter.at_bound(name, x) for name, x in zip(names, solution.x))
+    correction = step if corrects else np.zeros_like(step)
+    corrected = solution.x + correction
+    hose = fitter.hose_at(corrected)
+    after = fitter.deviations(hose)
+    remaining = solution.fun + model_error + solution.jac @ correction  # the exact model's residuals, corrected fit
+    # each residual vector is normal to the model centreline (closest point): two degrees of freedom per station
+    inflation = scatter_inflation([row.reshape(-1, 3) for row in fitter.split(remaining)])
+    scatter_std = math.sqrt(inflation) * _relative_std(solution.jac, remaining, 2 * fitter.station_count)
+    discretisation_std = (min(1.0, (RICHARDSON_SEGMENTS / problem.hose.segments) ** 2) if corrects else 1.0) * np.abs(step)
     total_std = np.hypot(scatter_std, discretisation_std)
     warnings, confounded = [], {}
     for effect in _fixed_parameter_effects(fitter, solution, total_std, model_error):
         confounded.update({name: effect for name in effect.moves})
         warnings.append(effect.message(fitter, solution.x))
     parameters = []
-    for name, x, std, scatter, floor in zip(names, solution.x, total_std, scatter_std, discretisation_std):
+    for name, x, x_fit, std, scatter, floor in zip(names, corrected, solution.x, total_std, scatter_std,
+                                                   discretisation_std):
         value, std, scatter, floor = fitter.value(name, x), *(fitter.std(name, x, v) for v in (std, scatter, floor))
+        moved = value - fitter.value(name, x_fit)
         if name in ("preset_curvature", "preset_angle"):  # as the hose holds them: a negative curvature turns the set
             value = current_value(hose, name)
         at_bound = fitter.at_bound(name, x)
@@ -311,7 +330,7 @@ def calibrate(
         identified = not note
         parameters.append(FittedParameter(name, PARAMETERS[name], fitter.initial[name], value,
                                           std if identified else None, identified, note,
-                                          *(v if np.isfinite(v) else None for v in (scatter, floor))))
+                                          *(v if np.isfinite(v) else None for v in (scatter, floor)), moved))
     parameters = _angle_of_an_undetermined_set(parameters, notes)
     missed = [(case, d, limit) for case, d, limit in zip(cases, after, limits) if not d.passes(limit)]
     for case, d, limit in missed:
@@ -462,11 +481,23 @@ def _model_error(fitter: _Fitter, solution) -> np.ndarray:
     return 4.0 / 3.0 * (fine - solution.fun)
 
 
-def _discretisation_std(solution, model_error: np.ndarray) -> np.ndarray:
-    """Standard uncertainty of each parameter's x from the discretisation: the Gauss-Newton step that
-    removing the model error from the residuals takes from the fit."""
+def _order_two(problem: Problem, names: list[str]) -> bool:
+    """Whether the model's shape converges at order 2 in the segment length, as the discretisation correction
+    assumes: the plain rod (observed orders 1.98-2.01, docs/model.md).  A set (fitted or given) converges slower
+    (the thesis hose with R 300 mm: its shape error 0.84, 0.38, 0.13 mm at 32, 64, 128 segments, order 1.2-1.5), and
+    the springs' and the braid's order is not measured: their fits are not corrected, and the whole step is
+    their uncertainty, as before."""
+    hose = problem.hose
+    return (hose.preset is None and hose.stiffeners is None and hose.braid is None
+            and not any(name.startswith("preset_") for name in names))
+
+
+def _discretisation_step(solution, model_error: np.ndarray) -> np.ndarray:
+    """The change of each parameter's x that the N-segment model's discretisation costs the fit: the Gauss-Newton
+    step that removing the model error (mm) from the residuals takes from it.  Added to the fit, it gives the
+    parameters the exact (continuum) hose would be fitted with; (RICHARDSON_SEGMENTS / N)^2 of it stays uncertain."""
     step, *_ = np.linalg.lstsq(solution.jac, -model_error, rcond=1e-8)
-    return np.abs(step)
+    return step
 
 
 @dataclass
