@@ -33,11 +33,15 @@ springs add their energy, gradient and Hessian blocks to every joint; with sprin
 
 Preset (natural curvature).  Optionally (`rest`, see model/preset.py) every joint j has a
 stress-free relative rotation R0_j (the Q of the joint in the hose's unloaded shape) and its
-energy is that of the rotation left over, Q' = R0_j^T Q = A' B^T with A' = R0_j^T A:  the
-joint kernel is evaluated on the turned frame A'.  A world rotation of A turns A' alike, so
-the kernel's gradient and Hessian with respect to delta_a are exact for the preset joint too.
-The Darboux vector of Q' is kappa - kappa0 to first order; the energy is zero exactly at the
-stress-free shape.  With rest None (the default) Numba compiles the branch away.
+energy is that of the rotation left over, split evenly: with H the half of R0_j (R0_j = H H),
+Q'' = H^T Q H^T = A'' B''^T with A'' = H^T A and B'' = H B, and the joint kernel is evaluated on
+the turned frames A'', B''.  The turns act on the material side and a world rotation on the
+other, so the kernel's gradient and Hessian with respect to delta_a and delta_b are exact for
+the preset joint too.  The Darboux vector of Q'' is kappa - kappa0 to second order (the even
+split cancels the commutator term of the Baker-Campbell-Hausdorff series, h/2 kappa0 x kappa,
+that Q' = R0^T Q keeps: with it a set converged at order 1 only, measured; tests/test_preset.py);
+the energy is zero exactly at the stress-free shape.  With rest None (the default) Numba
+compiles the branch away.
 
 Braid coupling.  Optionally (`braid`, see mechanics/braid.py) every joint adds l W_braid(kappa),
 the energy of tension-only strands at +-beta, a function of the same Darboux vector kappa = 2 a / (c l):
@@ -50,6 +54,8 @@ loop over joints so the cost is linear in N.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -172,21 +178,41 @@ def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa,
 
 
 @njit(cache=True)
-def rest_turned_into(rest_rotation, frame, out):
-    """out = rest_rotation^T frame: the frame turned back by a joint's stress-free rotation R0 (see the module doc)."""
-    for k in range(3):
-        for x in range(3):
-            out[k, x] = (rest_rotation[0, k] * frame[0, x] + rest_rotation[1, k] * frame[1, x]
-                         + rest_rotation[2, k] * frame[2, x])
+def rest_split_into(rest_rotation, frame_a, frame_b, turned_a, turned_b):
+    """turned_a = H^T frame_a and turned_b = H frame_b, H the half of a joint's stress-free rotation R0 = H H (same
+    axis, half the angle; R0 within half a turn), so that turned_a turned_b^T = H^T Q H^T (see the module doc)."""
+    # R0 = I + sin(t) [k]x + (1 - cos t) [k]x^2: its axial vector sin(t) k and cos(t) = (tr R0 - 1) / 2; with
+    # u = sin(t/2) k = axial / (2 cos(t/2)), H = I + [u]x + [u]x^2 / (1 + cos(t/2))
+    cos_half = math.sqrt(max(0.25 * (1.0 + rest_rotation[0, 0] + rest_rotation[1, 1] + rest_rotation[2, 2]), 1e-300))
+    scale = 0.25 / cos_half
+    u0 = scale * (rest_rotation[2, 1] - rest_rotation[1, 2])
+    u1 = scale * (rest_rotation[0, 2] - rest_rotation[2, 0])
+    u2 = scale * (rest_rotation[1, 0] - rest_rotation[0, 1])
+    w = 1.0 / (1.0 + cos_half)
+    uu = u0 * u0 + u1 * u1 + u2 * u2
+    h00, h11, h22 = 1.0 + w * (u0 * u0 - uu), 1.0 + w * (u1 * u1 - uu), 1.0 + w * (u2 * u2 - uu)
+    h01, h10 = -u2 + w * u0 * u1, u2 + w * u0 * u1
+    h02, h20 = u1 + w * u0 * u2, -u1 + w * u0 * u2
+    h12, h21 = -u0 + w * u1 * u2, u0 + w * u1 * u2
+    for x in range(3):
+        a0, a1, a2 = frame_a[0, x], frame_a[1, x], frame_a[2, x]
+        turned_a[0, x] = h00 * a0 + h10 * a1 + h20 * a2
+        turned_a[1, x] = h01 * a0 + h11 * a1 + h21 * a2
+        turned_a[2, x] = h02 * a0 + h12 * a1 + h22 * a2
+        b0, b1, b2 = frame_b[0, x], frame_b[1, x], frame_b[2, x]
+        turned_b[0, x] = h00 * b0 + h01 * b1 + h02 * b2
+        turned_b[1, x] = h10 * b0 + h11 * b1 + h12 * b2
+        turned_b[2, x] = h20 * b0 + h21 * b1 + h22 * b2
 
 
 @njit(cache=True)
-def _preset_joint_terms(frame_a, frame_b, stiffness, joint_length, rest, joint, turned, grad_a, hess_aa, hess_ab, braid):
+def _preset_joint_terms(frame_a, frame_b, stiffness, joint_length, rest, joint, turned_a, turned_b, grad_a, hess_aa,
+                        hess_ab, braid):
     # joint_terms_into of joint `joint`, relative to its stress-free rotation rest[joint] when rest is given
     if rest is None:
         return joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid)
-    rest_turned_into(rest[joint], frame_a, turned)
-    return joint_terms_into(turned, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid)
+    rest_split_into(rest[joint], frame_a, frame_b, turned_a, turned_b)
+    return joint_terms_into(turned_a, turned_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid)
 
 
 @njit(cache=True)
@@ -221,15 +247,15 @@ def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=Tru
     """
     n = frames.shape[0]
     if rest is not None:
-        turned = np.empty((3, 3))
-        rest_turned_into(rest[0], start_frame, turned)
-        total = joint_energy(turned, frames[0], stiffness, 0.5 * h, braid)
+        turned_a, turned_b = np.empty((3, 3)), np.empty((3, 3))
+        rest_split_into(rest[0], start_frame, frames[0], turned_a, turned_b)
+        total = joint_energy(turned_a, turned_b, stiffness, 0.5 * h, braid)
         for i in range(n - 1):
-            rest_turned_into(rest[i + 1], frames[i], turned)
-            total += joint_energy(turned, frames[i + 1], stiffness, h, braid)
+            rest_split_into(rest[i + 1], frames[i], frames[i + 1], turned_a, turned_b)
+            total += joint_energy(turned_a, turned_b, stiffness, h, braid)
         if end_clamped:
-            rest_turned_into(rest[n], frames[n - 1], turned)
-            total += joint_energy(turned, end_frame, stiffness, 0.5 * h, braid)
+            rest_split_into(rest[n], frames[n - 1], end_frame, turned_a, turned_b)
+            total += joint_energy(turned_a, turned_b, stiffness, 0.5 * h, braid)
         return total
     total = joint_energy(start_frame, frames[0], stiffness, 0.5 * h, braid)
     for i in range(n - 1):
@@ -287,9 +313,9 @@ def assemble(
     if rest is None:  # the plain rod's calls stay as they are (a shared helper costs a third of this loop)
         energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab, braid)
     else:
-        turned = np.empty((3, 3))
-        rest_turned_into(rest[0], start_frame, turned)
-        energy = joint_terms_into(turned, frames[0], stiffness, 0.5 * h, g, haa, hab, braid)
+        turned_a, turned_b = np.empty((3, 3)), np.empty((3, 3))
+        rest_split_into(rest[0], start_frame, frames[0], turned_a, turned_b)
+        energy = joint_terms_into(turned_a, turned_b, stiffness, 0.5 * h, g, haa, hab, braid)
     if springs is not None:
         energy += spring_terms_into(start_frame, frames[0], springs, HALF, g, haa, hab)
     for x in range(3):  # element by element: a slice assignment compiles Numba's shape-error messages (0.5 s)
@@ -299,8 +325,8 @@ def assemble(
         if rest is None:
             energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab, braid)
         else:
-            rest_turned_into(rest[i + 1], frames[i], turned)
-            energy += joint_terms_into(turned, frames[i + 1], stiffness, h, g, haa, hab, braid)
+            rest_split_into(rest[i + 1], frames[i], frames[i + 1], turned_a, turned_b)
+            energy += joint_terms_into(turned_a, turned_b, stiffness, h, g, haa, hab, braid)
         if springs is not None:
             energy += spring_terms_into(frames[i], frames[i + 1], springs, FULL, g, haa, hab)
         for x in range(3):
@@ -314,8 +340,8 @@ def assemble(
         if rest is None:
             energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab, braid)
         else:
-            rest_turned_into(rest[n_seg], frames[n_seg - 1], turned)
-            energy += joint_terms_into(turned, end_frame, stiffness, 0.5 * h, g, haa, hab, braid)
+            rest_split_into(rest[n_seg], frames[n_seg - 1], end_frame, turned_a, turned_b)
+            energy += joint_terms_into(turned_a, turned_b, stiffness, 0.5 * h, g, haa, hab, braid)
         if springs is not None:
             energy += spring_terms_into(frames[n_seg - 1], end_frame, springs, HALF, g, haa, hab)
         for x in range(3):
@@ -361,7 +387,7 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
     g = np.empty(3)
     haa = np.empty((3, 3))
     hab = np.empty((3, 3))
-    turned = np.empty((3, 3))
+    turned_a, turned_b = np.empty((3, 3)), np.empty((3, 3))
     moments = np.zeros((n_seg + 1, 3))
     darboux = np.zeros((n_seg + 1, 3))
     for j in range(n_seg + 1 if end_clamped else n_seg):
@@ -371,7 +397,7 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
             fa, fb, length, kind = frames[n_seg - 1], end_frame, 0.5 * h, HALF
         else:
             fa, fb, length, kind = frames[j - 1], frames[j], h, FULL
-        _preset_joint_terms(fa, fb, stiffness, length, rest, j, turned, g, haa, hab, braid)
+        _preset_joint_terms(fa, fb, stiffness, length, rest, j, turned_a, turned_b, g, haa, hab, braid)
         if springs is not None:
             spring_terms_into(fa, fb, springs, kind, g, haa, hab)
         for x in range(3):

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
 
 from hoseline.mechanics.newton import RodProperties, node_positions, solve_equilibrium
 from hoseline.mechanics.rod import RodState
@@ -44,6 +45,7 @@ from hoseline.procedures.scans.deviation import closest_on_polyline
 
 RETURN_TOLERANCE = 1e-3  # a joint may exceed the friction threshold by this fraction of it
 RETURN_ITERATIONS = 500  # equilibrium-and-return rounds allowed per twist step (each takes about 8 % off the excess)
+RETURN_CORRECTIONS = 2  # fixed-point steps that put a returned joint exactly on the threshold (returned_rest)
 UNIDENTIFIED_RELATIVE_STD = 0.25  # a threshold less certain than this is not identified
 BAND_OVER_SCATTER = 3.0  # a measured band is a band when its mean exceeds this many RMS residuals of the fit
 
@@ -111,17 +113,24 @@ def _twist_grid(largest_twist_deg: float, step_deg: float) -> np.ndarray:
 
 def joint_deviation(props: RodProperties, start_frame, frames, end_frame, rest) -> tuple[np.ndarray, np.ndarray]:
     """(Q (N+1,3,3), e (N+1,3)): each joint's relative rotation Q = A B^T and the Darboux vector (1/mm,
-    material) of what is left of it after its stress-free rotation, R0^T Q (mechanics/energy.py)."""
+    material) of what is left of it after its stress-free rotation R0 = H H, H^T Q H^T (mechanics/energy.py)."""
     before = np.concatenate([start_frame[None], frames])
     after = np.concatenate([frames, end_frame[None]])
     relative = np.einsum("jkx,jlx->jkl", before, after)
-    left = np.einsum("jmk,jml->jkl", rest, relative)
+    left = _left_over(rest, relative)
     axial = np.stack([left[:, 2, 1] - left[:, 1, 2], left[:, 0, 2] - left[:, 2, 0], left[:, 1, 0] - left[:, 0, 1]],
                      axis=1)
     lengths = np.full(len(left), props.segment_length)
     lengths[[0, -1]] = 0.5 * props.segment_length
     c = 1.0 + np.trace(left, axis1=1, axis2=2)
     return relative, 2.0 * axial / (c * lengths)[:, None]
+
+
+def _left_over(rest: np.ndarray, relative: np.ndarray) -> np.ndarray:
+    """(K, 3, 3): what is left of each joint's relative rotation Q after its stress-free rotation R0 = H H, split
+    evenly as the energy does (mechanics/energy.py): H^T Q H^T."""
+    half = Rotation.from_rotvec(0.5 * Rotation.from_matrix(rest).as_rotvec()).as_matrix()
+    return np.einsum("jmk,jml,jnl->jkn", half, relative, half)
 
 
 def returned_rest(
@@ -131,7 +140,10 @@ def returned_rest(
 
     Every joint whose moment K e exceeds `threshold` (N*mm) in magnitude gets the stress-free
     rotation R0 = Q C(e')^T, where C(e') is the rotation of Darboux vector e' = e threshold / |K e|
-    (model/preset.rest_rotations): its moment is brought back radially onto the threshold.
+    (model/preset.rest_rotations): its moment is brought back radially onto the threshold.  (The energy splits
+    R0 evenly, H^T Q H^T with R0 = H H: what is left is then C(e') turned by H, the same angle about an axis
+    turned by half the joint's set, so the moment's size is the threshold's to within that turn's effect on an
+    anisotropic K, O(h kappa).)
     """
     relative, deviation = joint_deviation(props, start_frame, frames, end_frame, rest)
     moment = np.linalg.norm(deviation * props.stiffness, axis=1)
@@ -139,9 +151,15 @@ def returned_rest(
     if not np.any(over):
         return rest, float(np.max(moment) - threshold)
     kept = deviation * np.where(over, threshold / np.maximum(moment, 1e-300), 1.0)[:, None]
-    elastic = rest_rotations(kept, props.segment_length)
+    wanted = Rotation.from_matrix(rest_rotations(kept, props.segment_length)[over]).as_rotvec()
+    # R0 = exp(a) with H^T Q H^T = C(e'): a = log Q - log C to second order (the even split has no commutator
+    # term); RETURN_CORRECTIONS fixed-point steps on the rotation vector left over make it exact to rounding
+    turn = Rotation.from_matrix(relative[over]).as_rotvec() - wanted
+    for _ in range(RETURN_CORRECTIONS):
+        left = _left_over(Rotation.from_rotvec(turn).as_matrix(), relative[over])
+        turn = turn - (wanted - Rotation.from_matrix(left).as_rotvec())
     new_rest = rest.copy()
-    new_rest[over] = np.einsum("jkl,jml->jkm", relative[over], elastic[over])
+    new_rest[over] = Rotation.from_rotvec(turn).as_matrix()
     return new_rest, float(np.max(moment) - threshold)
 
 

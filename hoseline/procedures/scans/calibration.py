@@ -18,7 +18,7 @@ than their uncertainty if freed, when it would remove most of the remaining misf
 
 Discretisation.  The N-segment model's own error (_model_error, from one evaluation with twice the
 segments) moves the fit; the Gauss-Newton step that removes it is added to the fitted values, so they
-are the exact hose's (the plain rod only, whose order 2 the correction assumes: _order_two).  Uncertainty.  Two parts in quadrature: the scatter, s^2 (J^T J)^-1 of the
+are the exact hose's (the plain rod and a set, whose order 2 the correction assumes: _order_two).  Uncertainty.  Two parts in quadrature: the scatter, s^2 (J^T J)^-1 of the
 corrected fit's residuals times their variance inflation along the hose (scatter_inflation: n
 stations carry the information of n / inflation independent ones), and (RICHARDSON_SEGMENTS / N)^2 of
 the discretisation correction (where it is not made, the whole step).  Failures (a parameter at its bound, limits
@@ -483,13 +483,12 @@ def _model_error(fitter: _Fitter, solution) -> np.ndarray:
 
 def _order_two(problem: Problem, names: list[str]) -> bool:
     """Whether the model's shape converges at order 2 in the segment length, as the discretisation correction
-    assumes: the plain rod (observed orders 1.98-2.01, docs/model.md).  A set (fitted or given) converges slower
-    (the thesis hose with R 300 mm: its shape error 0.84, 0.38, 0.13 mm at 32, 64, 128 segments, order 1.2-1.5), and
-    the springs' and the braid's order is not measured: their fits are not corrected, and the whole step is
-    their uncertainty, as before."""
+    assumes: the plain rod (observed orders 1.98-2.01, docs/model.md) and a set (2.05-2.10 since its stress-free
+    rotation is split evenly over each joint, tests/test_preset.py).  The springs' and the braid's order is not
+    measured: their fits are not corrected, and the whole step is their uncertainty, as before.  names: the
+    fitted parameters (the braid's imply a braid)."""
     hose = problem.hose
-    return (hose.preset is None and hose.stiffeners is None and hose.braid is None
-            and not any(name.startswith("preset_") for name in names))
+    return hose.stiffeners is None and hose.braid is None and not any(name.startswith("braid_") for name in names)
 
 
 def _discretisation_step(solution, model_error: np.ndarray) -> np.ndarray:
