@@ -95,12 +95,12 @@ export class FittingsView {
     }
   }
 
-  /** Put the fittings and clips where a state message has them, except one the user is dragging. */
-  place(fittings, clips = []) {
+  /** Put the fittings and clips where a state message has them, except one the user is dragging (unless `dragged`). */
+  place(fittings, clips = [], dragged = false) {
     const all = { ...fittings, ...Object.fromEntries(clips.map((clip, k) => [`clip${k}`, clip])) };
     for (const [name, fitting] of Object.entries(all)) {
       if (!this.objects[name]) continue;
-      if (this.dragging && name === this.selected) continue;
+      if (this.dragging && name === this.selected && !dragged) continue;
       const [w, x, y, z] = fitting.quaternion;
       this.objects[name].position.fromArray(fitting.point);
       this.objects[name].quaternion.set(x, y, z, w);
