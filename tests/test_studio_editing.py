@@ -84,19 +84,15 @@ def select(page, name: str, mode: str) -> None:
 def gizmo_handle(page, name: str, axis: str, mode: str) -> list[float]:
     """A screen point on the gizmo's `axis` ('X', 'Y', 'Z') handle at fitting `name`, found by hovering: along the
     axis for a move, round the ring about it for a turn."""
-    index = "XYZ".index(axis)
     if mode == "translate":
-        tries = [[length if k == index else 0.0 for k in range(3)] for length in (12, 16, 20, 25, 30, 35, 40, 50, 60)]
-    else:
-        tries = []
-        for radius in (30, 40, 50, 60, 25, 70):
-            for angle in range(10, 360, 20):
-                a, b = [k for k in range(3) if k != index]
-                point = [0.0, 0.0, 0.0]
-                point[a], point[b] = radius * math.cos(math.radians(angle)), radius * math.sin(math.radians(angle))
-                tries.append(point)
-    for local in tries:
-        point = screen_point(page, name, local)
+        index = "XYZ".index(axis)
+        tries = [screen_point(page, name, [length if k == index else 0.0 for k in range(3)])
+                 for length in (12, 16, 20, 25, 30, 35, 40, 50, 60)]
+    else:  # circles round the fitting on the screen
+        centre = screen_point(page, name, [0.0, 0.0, 0.0])
+        tries = [[centre[0] + radius * math.cos(math.radians(angle)), centre[1] + radius * math.sin(math.radians(angle))]
+                 for radius in range(40, 200, 8) for angle in range(5, 360, 15)]
+    for point in tries:
         page.mouse.move(*point)
         if page.evaluate("() => window.studio.fittings.gizmo.axis") == axis:
             return point
@@ -104,10 +100,14 @@ def gizmo_handle(page, name: str, axis: str, mode: str) -> list[float]:
 
 
 def drag_handle(page, name: str, axis: str, mode: str, pixels, steps: int = 15, release: bool = True) -> dict:
-    """Press on the gizmo's `axis` handle at `name`, move the mouse by `pixels` (dx, dy) in `steps`, release; the state
-    drawn after it."""
+    """Press on the gizmo's `axis` handle at `name`, move the mouse by `pixels` (dx, dy; for a turn, a number: along the
+    ring, the way round that it is positive) in `steps`, release; the state drawn after it."""
     select(page, name, mode)
     handle = gizmo_handle(page, name, axis, mode)
+    if mode == "rotate":  # across the radius from the fitting to the handle on the screen
+        centre = screen_point(page, name, [0.0, 0.0, 0.0])
+        radial = np.array(handle) - np.array(centre)
+        pixels = pixels * np.array([-radial[1], radial[0]]) / np.linalg.norm(radial)
 
     def drag():
         page.mouse.down()
@@ -165,19 +165,19 @@ def end_in_plane(page):
 
 
 def end_turned(page):
-    return drag_handle(page, "end", "X", "rotate", (40, 40))
+    return drag_handle(page, "end", "X", "rotate", 80)
 
 
 def end_rolled(page):
-    return drag_handle(page, "end", "Z", "rotate", (40, -30))
+    return drag_handle(page, "end", "Z", "rotate", 80)
 
 
 def start_rolled(page):
-    return drag_handle(page, "start", "Z", "rotate", (-40, 30))
+    return drag_handle(page, "start", "Z", "rotate", 120)
 
 
 def start_turned(page):
-    return drag_handle(page, "start", "Y", "rotate", (30, 40))
+    return drag_handle(page, "start", "Y", "rotate", 80)
 
 
 def end_dragged_then_twisted(page):
@@ -309,7 +309,7 @@ def test_snapping_moves_and_turns_in_whole_steps_with_a_live_readout(browser, tm
         page.mouse.up()
         assert readout.is_hidden()
         before = page.evaluate("() => window.studio.state.fittings.end.quaternion")
-        state = drag_handle(page, "end", "Z", "rotate", (40, -30))
+        state = drag_handle(page, "end", "Z", "rotate", 80)
         dot = abs(float(np.dot(before, state["fittings"]["end"]["quaternion"])))
         angle = math.degrees(2 * math.acos(min(1.0, dot)))
         assert angle >= 15.0 - 1e-6 and angle / 15.0 == pytest.approx(round(angle / 15.0), abs=1e-6)

@@ -41,12 +41,11 @@ from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.tracking import Fittings, Step, Tracker, twisted
 from hoseline.studio.messages import HoseTarget, Target
 from hoseline.studio.ports import PortAnchor, piece_outline
-from hoseline.studio.saving import SAVED_SHAPE_TOLERANCE, assembly_twist
+from hoseline.studio.saving import saved_twist
 from hoseline.studio.view import placement_comparison, session_message, state_message
 
 
 MAX_TWIST_STEP = 90.0  # degrees of twist per step of continuation (a frame cannot tell 270 from -90)
-SAME_TWIST = 1e-9  # degrees: a saved twist this close to the problem's is the problem's (no second placement)
 
 
 class StudioError(ValueError):
@@ -233,20 +232,10 @@ class Session:
 
     def _compared(self, fresh: Result) -> dict:
         """The comparison of the shape shown with `fresh`, a fresh placement of the problem (view.placement_comparison),
-        and with the problem file as saved: "saved" holds its twist at assembly (degrees, saving.assembly_twist),
-        the change from the problem's ("twist_change", signed), how far its fresh placement is from the shape shown
-        ("distance", mm) and whether that is within SAVED_SHAPE_TOLERANCE ("same"); "failed" when it cannot be placed."""
+        and, as "saved", with the problem file as saved (saving.saved_twist: its twist at assembly and how far its
+        fresh placement is from the shape shown)."""
         comparison = placement_comparison(self.tracker.centerline, self.end_frame, fresh)
-        twist = assembly_twist(self.problem.end_twist_deg, self.tracker.fittings, fresh)
-        saved = {"twist": twist, "twist_change": twist - self.problem.end_twist_deg}
-        try:
-            if abs(saved["twist_change"]) > SAME_TWIST:
-                fresh = solve(replace(self.problem, end_twist_deg=twist))
-            distance = float(np.max(np.linalg.norm(fresh.centerline - self.tracker.centerline, axis=1)))
-            saved.update(distance=distance, same=distance <= SAVED_SHAPE_TOLERANCE)
-        except PlacementError as exc:
-            saved.update(same=False, failed=str(exc))
-        comparison["saved"] = saved
+        comparison["saved"] = saved_twist(self.problem, self.tracker.fittings, fresh, self.tracker.centerline)
         return comparison
 
     @property
@@ -290,7 +279,7 @@ class Session:
 
     def problem_toml(self, assembled: bool = False) -> str:
         """The problem as a problem file (mounts and hose as now): with the twist at assembly that places it as shown
-        (saving.assembly_twist, found by a fresh placement if none was made since the last change; the twist as set
+        (saving.saved_twist, found by a fresh placement if none was made since the last change; the twist as set
         when no fresh placement can be made), or, `assembled`, with the twist as set (the shape "Place again" gives)."""
         if assembled:
             return problem_to_toml(self.problem)
