@@ -34,7 +34,10 @@ export class FittingsView {
       this.dragging = event.value;
       if (!event.value && this.afterDrag) this.afterDrag();
     });
-    this.gizmo.addEventListener('objectChange', () => this.onDrag(this.selected, this.objects[this.selected]));
+    this.gizmo.addEventListener('objectChange', () => {
+      if (this.adjust) this.adjust(this.objects[this.selected]);  // snapping (snapping.js), before it is sent
+      this.onDrag(this.selected, this.objects[this.selected]);
+    });
     this.dragging = false;
     this.selected = null;
   }

@@ -40,7 +40,7 @@ const connection = new Connection(receive, () => panel.message('the studio serve
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
 const edits = new EditHistory(send);
 const toolbar = view.querySelector('.toolbar');
-const snapping = new Snapping(fittings.gizmo, toolbar, view);
+const snapping = new Snapping(fittings, toolbar, view);
 const measure = new Measure(studioScene, { hose: hose.group, fitting: fittings.group, obstacle: obstacles.group }, toolbar, view);
 const persisted = new Persisted();
 let keptSelection = { selected: persisted.kept.selected, mode: persisted.kept.mode };  // put back at the first state
@@ -81,8 +81,10 @@ function draw(message) {
   paint();
   fittings.shapeEnds(message.pieces);
   obstacles.place(message.obstacle_poses);
-  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq) fittings.place(message.fittings, message.clips);
-  else if (message.seq === refused) fittings.place(message.fittings, message.clips, true);  // a dragged handle stops at the last shape reached
+  // a handle dragged past where the hose can follow stops at the last shape reached
+  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq || message.seq === refused) {
+    fittings.place(message.fittings, message.clips, message.seq === refused);
+  }
   if (starting) { fitView(); starting = false; restoreSelection(); }
   studioScene.render();
   const drawnAt = performance.now();

@@ -1,14 +1,17 @@
-// Snapping of the gizmo's moves and turns to steps (mm, degrees), switched with a key or the toolbar, and a readout of
-// the distance and angle moved since the drag began, shown over the view while dragging.
+// Snapping of the gizmo's moves and turns to steps (mm, degrees) from where the drag began (a move along the fitting's
+// axes in whole steps, a turn in whole steps of angle), switched with a key or the toolbar, and a readout of the
+// distance and angle moved since the drag began, shown over the view while dragging.
 import * as THREE from 'three';
 
 const fmt = (x) => String(Number(x.toFixed(3)));
 
 export class Snapping {
-  /** gizmo: the TransformControls of the fittings; toolbar: where its controls go; view: the element the readout
+  /** fittings: the FittingsView, whose gizmo is snapped; toolbar: where its controls go; view: the element the readout
    * lies over; step (mm) and angle (degrees): the snapping steps to start with. */
-  constructor(gizmo, toolbar, view, { step = 5, angle = 15 } = {}) {
+  constructor(fittings, toolbar, view, { step = 5, angle = 15 } = {}) {
+    const gizmo = fittings.gizmo;
     this.gizmo = gizmo;
+    fittings.adjust = (object) => this.snap(object);
     this.on = false;
     this.button = Object.assign(document.createElement('button'), { id: 'snap', textContent: 'Snap', title: 'snap moves and turns to steps (S)' });
     this.stepBox = Object.assign(document.createElement('input'), { id: 'snap-step', type: 'number', min: 0, step: 'any', value: step, title: 'snapping step of a move, mm' });
@@ -29,7 +32,7 @@ export class Snapping {
   set(on) {
     this.on = on;
     const step = Number(this.stepBox.value), angle = Number(this.angleBox.value);
-    this.gizmo.setTranslationSnap(on && step > 0 ? step : null);
+    this.step = on && step > 0 ? step : null;
     this.gizmo.setRotationSnap(on && angle > 0 ? THREE.MathUtils.degToRad(angle) : null);
     this.button.classList.toggle('active', on);
     if (this.onChange) this.onChange();
@@ -49,6 +52,15 @@ export class Snapping {
     if (!object) return;
     this.start = { position: object.position.clone(), quaternion: object.quaternion.clone() };
     this.moved();
+  }
+
+  /** Put a moved object at whole steps from where the drag began, along the axes of its frame then. */
+  snap(object) {
+    if (!this.step || !this.start || this.gizmo.mode !== 'translate') return;
+    const inverse = this.start.quaternion.clone().invert();
+    const offset = object.position.clone().sub(this.start.position).applyQuaternion(inverse);
+    offset.set(...offset.toArray().map((x) => Math.round(x / this.step) * this.step));
+    object.position.copy(this.start.position).add(offset.applyQuaternion(this.start.quaternion));
   }
 
   /** Show how far the dragged object is from where the drag began: distance (mm) with its components, angle (°). */
