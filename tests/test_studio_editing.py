@@ -223,17 +223,68 @@ def test_after_the_issue_s_drag_the_badge_gives_the_signed_twist_the_file_is_sav
         assert errors == []
 
 
-def test_a_dragged_clip_and_a_drag_onto_the_floor_save_as_shown(browser, tmp_path):
-    with opened_page(browser, Session(clipped_thesis_problem(thesis_problem())), tmp_path / "clip") as (page, errors, _):
+def test_a_dragged_clip_saves_as_shown(browser, tmp_path):
+    with opened_page(browser, Session(clipped_thesis_problem(thesis_problem())), tmp_path) as (page, errors, _):
         drag_handle(page, "clip1", "Y", "translate", (0, 30))  # the rotating clip
-        solved = saved_and_solved(page, tmp_path / "clip")
+        solved = saved_and_solved(page, tmp_path)
         assert np.max(np.linalg.norm(solved - shown(page), axis=1)) <= SAVED_TO_SHOWN_MM
         assert errors == []
-    with opened_page(browser, Session(resting_hose()), tmp_path / "floor") as (page, errors, _):
-        state = drag_handle(page, "end", "Z", "translate", -60)  # towards the start: more of it on the floor
+
+
+def snapped_drag(page, name: str, axis: str, readout: str) -> dict:
+    """With snapping on, drag the `axis` arrow of `name` as a user does, watching the readout, until it reads `readout`
+    (turning back at the first step if that went the other way); the state drawn after the release."""
+    page.mouse.click(700, 880)
+    page.keyboard.press("s")
+    select(page, name, "translate")
+    handle = np.array(gizmo_handle(page, name, axis, "translate"))
+    radial = handle - np.array(screen_point(page, name, [0.0, 0.0, 0.0]))
+    step = 0.7 * radial / np.linalg.norm(radial)  # less than a snapping step on the screen
+    components = lambda text: np.array([float(x) for x in text.split("[")[1].rstrip("]").split(",")])
+
+    def drag():
+        page.mouse.down()
+        position, direction = handle.copy(), 1.0
+        for _ in range(600):
+            position += direction * step
+            page.mouse.move(*position)
+            text = page.locator("#drag-readout").inner_text()
+            if text == readout:
+                page.mouse.up()
+                return
+            moved = components(text)
+            if direction > 0 and np.any(moved) and np.dot(moved, components(readout)) < 0:
+                direction = -1.0
+        raise AssertionError(f"the readout never read {readout!r}")
+
+    return drawn_after(page, drag)
+
+
+def test_a_drag_along_the_floor_saves_as_shown(browser, tmp_path):
+    with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
+        state = snapped_drag(page, "end", "Z", "moved 30 mm [-30, 0, 0]")  # towards the start: more of it on the floor
         assert min(c["min_gap"] for c in state["readouts"]["contacts"]) < 0.05  # lying on the floor
-        solved = saved_and_solved(page, tmp_path / "floor")
+        solved = saved_and_solved(page, tmp_path)
         assert np.max(np.linalg.norm(solved - shown(page), axis=1)) <= SAVED_TO_SHOWN_MM
+        assert errors == []
+
+
+def test_where_no_file_gives_the_shape_shown_save_asks_and_each_choice_solves_as_it_says(browser, tmp_path):
+    """10 mm along the floor the dragged hose lies on a branch no fresh placement reaches, whatever the twist."""
+    with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
+        snapped_drag(page, "end", "Z", "moved 10 mm [-10, 0, 0]")
+        page.click("#save")
+        page.wait_for_selector("#save-choice a.save-moved", timeout=60000)
+        comparison = page.evaluate("() => window.studio.state.comparison")
+        assert not comparison["saved"]["same"] and comparison["saved"]["distance"] > 1.0
+        assert f"{comparison['saved']['distance']:.4g} mm off" in page.locator("#save-choice").inner_text()
+        as_moved = saved_and_solved(page, tmp_path / "moved", "#save-choice a.save-moved")
+        distance = np.max(np.linalg.norm(as_moved - shown(page), axis=1))
+        assert distance == pytest.approx(comparison["saved"]["distance"], abs=SAVED_TO_SHOWN_MM)
+        page.click("#save")
+        assembled = saved_and_solved(page, tmp_path / "assembled", "#save-choice a.save-assembled")
+        placed = drawn_after(page, lambda: page.click("#place-again"))
+        assert np.max(np.linalg.norm(assembled - np.array(placed["centerline"]), axis=1)) <= SAVED_TO_SHOWN_MM
         assert errors == []
 
 

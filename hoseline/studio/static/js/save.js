@@ -13,15 +13,26 @@ export class SaveChoice {
     this.form = Object.assign(document.createElement('p'), { id: 'save-choice', hidden: true });
     link.parentElement.after(this.form);
     link.addEventListener('click', (event) => {
-      const saved = comparison() && comparison().saved;
-      if (!saved || saved.same) { this.form.hidden = true; return; }  // the file solves to the shape shown
+      const known = comparison();
+      if (known && known.saved && known.saved.same) { this.form.hidden = true; return; }  // it solves as shown
       event.preventDefault();
-      this.ask(comparison());
+      if (known) { this.ask(known); return; }
+      this.form.replaceChildren('checking that the saved file solves to the shape shown ...');
+      this.form.hidden = false;
+      this.waitFor(comparison);
     });
   }
 
+  /** Once the server has placed the problem afresh (the comparison of the next state), save or ask. */
+  waitFor(comparison) {
+    const known = comparison();
+    if (!known) { setTimeout(() => this.waitFor(comparison), 100); return; }
+    this.form.hidden = true;
+    if (known.saved && known.saved.same) this.link.click(); else this.ask(known);
+  }
+
   ask(comparison) {
-    const saved = comparison.saved;
+    const saved = comparison.saved || { failed: comparison.failed, twist: null };  // no fresh placement at all
     const moved = saved.failed ? `(a fresh placement fails: ${saved.failed})` : `solves ${fmt(saved.distance)} mm off the shape shown`;
     const choice = (way, text, title) => Object.assign(document.createElement('a'), {
       href: `/problem.toml?as=${way}`, download: 'problem.toml', textContent: text, title, className: `save-${way}`,
