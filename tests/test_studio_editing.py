@@ -177,15 +177,16 @@ def start_rolled(page):
 
 
 def start_turned(page):
-    return drag_handle(page, "start", "Y", "rotate", 80)
+    return drag_handle(page, "start", "X", "rotate", 80)
 
 
-def end_dragged_then_twisted(page):
+def end_dragged_then_twist_typed(page):
     end_out_of_plane(page)
     return type_into(page, '.slider[data-key="twist"] input[type="number"]', "120")
 
 
-def twist_slider(page):
+def end_turned_then_twist_slider(page):
+    end_turned(page)
     box = page.locator('.slider[data-key="twist"] input[type="range"]').bounding_box()
     return drawn_after(page, lambda: page.mouse.click(box["x"] + 0.3 * box["width"], box["y"] + box["height"] / 2))
 
@@ -194,8 +195,8 @@ def end_tip_typed(page):
     return type_into(page, 'tr[data-fitting="end"][data-field="point"] td:nth-child(3) input', "-20")
 
 
-EDITS = [end_out_of_plane, end_in_plane, end_turned, end_rolled, start_rolled, start_turned, end_dragged_then_twisted,
-         twist_slider, end_tip_typed]
+EDITS = [end_out_of_plane, end_in_plane, end_turned, end_rolled, start_rolled, start_turned,
+         end_dragged_then_twist_typed, end_turned_then_twist_slider, end_tip_typed]
 
 
 @pytest.mark.parametrize("edit", EDITS, ids=[edit.__name__ for edit in EDITS])
@@ -260,9 +261,11 @@ def snapped_drag(page, name: str, axis: str, readout: str) -> dict:
     return drawn_after(page, drag)
 
 
-def test_a_drag_along_the_floor_saves_as_shown(browser, tmp_path):
+def test_a_drag_along_the_floor_then_a_turn_saves_as_shown(browser, tmp_path):
     with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
-        state = snapped_drag(page, "end", "Z", "moved 30 mm [-30, 0, 0]")  # towards the start: more of it on the floor
+        snapped_drag(page, "end", "Z", "moved 30 mm [-30, 0, 0]")  # towards the start: more of it on the floor
+        page.keyboard.press("s")  # snapping off
+        state = drag_handle(page, "end", "Z", "rotate", -60)  # rolled on the floor
         assert min(c["min_gap"] for c in state["readouts"]["contacts"]) < 0.05  # lying on the floor
         solved = saved_and_solved(page, tmp_path)
         assert np.max(np.linalg.norm(solved - shown(page), axis=1)) <= SAVED_TO_SHOWN_MM
