@@ -14,7 +14,9 @@ export class Persisted {
   keep(values) {
     Object.assign(this.kept, values);
     clearTimeout(this.timer);
-    this.timer = setTimeout(() => localStorage.setItem(KEY, JSON.stringify(this.kept)), 200);
+    this.timer = setTimeout(() => {
+      try { localStorage.setItem(KEY, JSON.stringify(this.kept)); } catch { /* storage off or full: nothing is kept */ }
+    }, 200);
   }
 
   /** Keep the camera of the view of session `sessionKey`. */
