@@ -313,8 +313,9 @@ def test_undo_and_redo_step_through_every_kind_of_edit_to_the_shapes_shown(brows
         for shape in reversed(shapes[:-1]):  # Ctrl+Z back to the first shape, each exactly as it was shown
             np.testing.assert_array_equal(np.array(press(page, "Control+z")["centerline"]), shape)
         page.wait_for_function("() => document.getElementById('problem-name').textContent !== 'longer'")
-        for shape in shapes[1:]:  # and forward again
+        for shape in shapes[1:-1]:  # and forward again, the last with the toolbar's button
             np.testing.assert_array_equal(np.array(press(page, "Control+Shift+z")["centerline"]), shape)
+        np.testing.assert_array_equal(drawn_after(page, lambda: page.click("#redo"))["centerline"], shapes[-1])
         page.wait_for_function("() => document.getElementById('problem-name').textContent === 'longer'")
         assert errors == []
 

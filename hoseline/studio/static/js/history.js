@@ -13,9 +13,15 @@ function undoKey(event) {
 }
 
 export class EditHistory {
-  /** send(message): sends {type: 'undo'} or {type: 'redo'} to the server. */
-  constructor(send) {
+  /** send(message): sends {type: 'undo'} or {type: 'redo'} to the server; toolbar: where their buttons go. */
+  constructor(send, toolbar) {
     this.edit = 0;  // the number of the gesture going on, sent with every message
+    toolbar.append(Object.assign(document.createElement('span'), { className: 'separator' }));
+    for (const [which, text, title] of [['undo', 'Undo', 'undo the last edit (Ctrl+Z)'], ['redo', 'Redo', 'redo (Ctrl+Shift+Z)']]) {
+      const button = Object.assign(document.createElement('button'), { id: which, textContent: text, title });
+      button.addEventListener('click', () => send({ type: which }));
+      toolbar.append(button);
+    }
     const next = () => { this.edit += 1; };
     window.addEventListener('pointerdown', next, true);
     window.addEventListener('keydown', (event) => {

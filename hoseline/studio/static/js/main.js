@@ -38,8 +38,8 @@ const panel = new Panel({
 });
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
-const edits = new EditHistory(send);
 const toolbar = view.querySelector('.toolbar');
+const edits = new EditHistory(send, toolbar);
 const snapping = new Snapping(fittings, toolbar, view);
 const measure = new Measure(studioScene, { hose: hose.group, fitting: fittings.group, obstacle: obstacles.group }, toolbar, view);
 const persisted = new Persisted();
