@@ -16,6 +16,11 @@
         cut the hose into this many segments and place it again (a discretisation is not continued)
     {"type": "clearance", "seq": 10, "obstacle": 0, "required": 25.4}
         the clearance (mm) required to obstacle number `obstacle` of the session message
+    {"type": "undo", "seq": 11}, {"type": "redo", "seq": 12}
+        put the session back to before the last edit, or do the last undone edit again (history.py)
+
+edit: optional in every message but undo and redo, the number of the user's gesture that sent it
+(a drag from press to release, a value typed); the session before a gesture is kept for undo.
 
 seq: a number the page counts up; each state message says which seq it has reached.
 """
@@ -79,6 +84,7 @@ class Target(_Message):
 
     type: Literal["set"]
     seq: int
+    edit: int | None = None
     start: FittingTarget | None = None
     end: FittingTarget | None = None
     twist: float | None = None
@@ -90,15 +96,17 @@ class Target(_Message):
 class Command(_Message):
     """An action that does not coalesce with others (see the module docstring for each type's fields)."""
 
-    type: Literal["place", "segments", "clearance"]
+    type: Literal["place", "segments", "clearance", "undo", "redo"]
     seq: int
+    edit: int | None = None
     segments: int | None = None
     obstacle: int | None = None
     required: float | None = None
 
     @pydantic.model_validator(mode="after")
     def _fields_of_its_type(self) -> "Command":
-        needed = {"place": (), "segments": ("segments",), "clearance": ("obstacle", "required")}[self.type]
+        needed = {"place": (), "segments": ("segments",), "clearance": ("obstacle", "required"), "undo": (),
+                  "redo": ()}[self.type]
         for name in ("segments", "obstacle", "required"):
             given = getattr(self, name) is not None
             if given != (name in needed):
@@ -117,9 +125,11 @@ def parse_message(text: str | bytes) -> Target | Command:
     except ValueError as exc:
         raise MessageError(f"not JSON: {exc}") from None
     kind = data.get("type") if isinstance(data, dict) else None
-    model = {"set": Target, "place": Command, "segments": Command, "clearance": Command}.get(kind)
+    model = {"set": Target, "place": Command, "segments": Command, "clearance": Command, "undo": Command,
+             "redo": Command}.get(kind)
     if model is None:
-        raise MessageError(f"unknown message type {kind!r}: expected 'set', 'place', 'segments' or 'clearance'")
+        raise MessageError(f"unknown message type {kind!r}: expected 'set', 'place', 'segments', 'clearance', "
+                           "'undo' or 'redo'")
     try:
         return model.model_validate(data)
     except pydantic.ValidationError as exc:

@@ -5,7 +5,8 @@
     WS   /ws                    the solve loop: targets and commands in (messages.py), states out (view.py)
     GET  /obstacle/{id}         an obstacle mesh, binary: vertex and triangle counts (uint32), then float32
                                 vertices (mm) and uint32 triangles
-    GET  /problem.toml          the problem as now, as a problem file
+    GET  /problem.toml          the problem as a problem file that solves to the shape shown (saving.py);
+                                ?as=assembled: with the twist as set (the shape "Place again" gives)
     GET  /export/{format}       iges, step, stl, ply, gltf or adams of the shape shown
     POST /upload/{name}         a dropped file (uploads.py); ?store=1 keeps it for a sweep file dropped with it
     POST /sweep                 run the open sweep, answer the address of its report
@@ -16,7 +17,8 @@ through it, one at a time.  While it works on a step, targets arriving over the 
 coalesce (inbox.py).  When nothing arrives for IDLE_SECONDS after a change, the problem is
 placed afresh and the page told whether that shape is the one shown.  Requests must come
 from the page's own origin and name an allowed host (no other site can drive the studio);
-the page's Content-Security-Policy lets it load and connect to its own origin only.
+the page's Content-Security-Policy lets it load and connect to its own origin only.  Every edit
+(a gesture of the page, a file opened) keeps the session before it for undo (history.py).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from hoseline.procedures.placement.continuation import PlacementError
+from hoseline.studio.history import History
 from hoseline.studio.inbox import Inbox
 from hoseline.studio.messages import Command, MessageError, parse_message
 from hoseline.studio.session import Session, StudioError
@@ -61,6 +64,7 @@ class Studio:
 
     def __init__(self, session: Session, work_dir: Path) -> None:
         self.session = session
+        self.history = History()
         self.solver = ThreadPoolExecutor(max_workers=1, thread_name_prefix="hoseline-solver")
         self.sweeps = ThreadPoolExecutor(max_workers=1, thread_name_prefix="hoseline-sweep")
         self.sockets: set[WebSocket] = set()
@@ -146,7 +150,9 @@ class Studio:
         if message is None:
             await self.broadcast(await self.run(self._compare))
             return
-        error, state = await self.run(self._solve, message)
+        error, state, opened = await self.run(self._solve, message)
+        if opened:  # undone or redone across a file opened: every page takes the other file's names and obstacles
+            await self.broadcast(await self.run(self.session_text))
         if error is not None:
             await websocket.send_text(error)
         await websocket.send_text(state)
@@ -162,12 +168,18 @@ class Studio:
             comparison = self.session.comparison = {"same": False, "failed": f"internal error ({exc})"}
         return json.dumps({"type": "comparison", "comparison": comparison}, allow_nan=False)
 
-    def _solve(self, message) -> tuple[str | None, str]:
-        """Carry out one message in the solver thread: (the error message or None, the state message), as JSON."""
+    def _solve(self, message) -> tuple[str | None, str, bool]:
+        """Carry out one message in the solver thread: (the error message or None, the state message, as JSON; whether
+        an undo or redo went to another file's session)."""
         started = time.perf_counter()
-        error = None
+        error, opened = None, False
+        recorded = message.type not in ("undo", "redo") and self.history.before(self.session, message.edit)
         try:
-            if isinstance(message, Command):
+            if message.type == "undo":
+                opened = self.history.undo(self.session)
+            elif message.type == "redo":
+                opened = self.history.redo(self.session)
+            elif isinstance(message, Command):
                 if message.type == "segments":
                     self.session.set_segments(message.segments)
                 elif message.type == "clearance":
@@ -182,7 +194,9 @@ class Studio:
             logging.getLogger(__name__).exception("studio: %s failed", message.type)
             error = json.dumps({"type": "error", "message": f"internal error ({type(exc).__name__}: {exc}); "
                                 "the shape shown is the last good one", "seq": message.seq})
-        return error, self.state_text(message.seq, started)
+        if error is not None and recorded:
+            self.history.forget()
+        return error, self.state_text(message.seq, started), opened
 
     # --- HTTP ---
 
@@ -205,7 +219,7 @@ class Studio:
             return JSONResponse({"error": str(exc)}, status_code=404)
 
     async def problem_file(self, request: Request) -> Response:
-        text = await self.run(self.session.problem_toml)
+        text = await self.run(self.session.problem_toml, request.query_params.get("as") == "assembled")
         return Response(text, media_type="application/toml", headers=_attachment("problem.toml"))
 
     async def export(self, request: Request) -> Response:
@@ -237,7 +251,7 @@ class Studio:
             data = await _body(request, SIZE_LIMITS[kind], name)
             path = self.uploads / name
             path.write_bytes(data)
-            done = await self.run(open_upload, self.session, path, kind, request.query_params.get("store") == "1", labels)
+            done = await self.run(self._open, path, kind, request.query_params.get("store") == "1", labels)
         except UploadError as exc:
             answer = {"error": str(exc)} | ({"labels": exc.labels} if exc.labels is not None else {})
             return JSONResponse(answer, status_code=exc.status)
@@ -245,6 +259,20 @@ class Studio:
             return JSONResponse({"error": f"{name}: read, but the hose cannot be placed: {exc}"}, status_code=422)
         await self.changed()
         return JSONResponse({"message": done})
+
+    def _open(self, path: Path, kind: str, store_only: bool, labels) -> str:
+        """Read an upload into the session (uploads.open_upload, in the solver thread) as an edit of its own (none when
+        the file was only kept for a sweep file: the session's revision then stays)."""
+        revision = self.session.revision
+        self.history.before(self.session, None)
+        try:
+            done = open_upload(self.session, path, kind, store_only, labels)
+        except Exception:
+            self.history.forget()
+            raise
+        if self.session.revision == revision:
+            self.history.forget()
+        return done
 
     async def run_sweep(self, request: Request) -> Response:
         if not _same_origin(request.headers):

@@ -41,6 +41,7 @@ from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.tracking import Fittings, Step, Tracker, twisted
 from hoseline.studio.messages import HoseTarget, Target
 from hoseline.studio.ports import PortAnchor, piece_outline
+from hoseline.studio.saving import saved_twist
 from hoseline.studio.view import placement_comparison, session_message, state_message
 
 
@@ -150,7 +151,7 @@ class Session:
         self.anchor = None if problem.fittings is None else PortAnchor.at(problem.fittings, placement.start_frame,
                                                                           self.end_base)
         self.port_frames = None if self.anchor is None else (self.anchor.start_port, self.anchor.end_port)
-        self.comparison = placement_comparison(self.tracker.centerline, self.end_frame, placement)
+        self.comparison = self._compared(placement)
         self.last_step = None
 
     def apply(self, target: Target) -> None:
@@ -224,10 +225,18 @@ class Session:
         """Place the current problem afresh and say how far that shape is from the one shown (idle work)."""
         if self.comparison is None:
             try:
-                self.comparison = placement_comparison(self.tracker.centerline, self.end_frame, solve(self.problem))
+                self.comparison = self._compared(solve(self.problem))
             except PlacementError as exc:
                 self.comparison = {"same": False, "failed": str(exc)}
         return self.comparison
+
+    def _compared(self, fresh: Result) -> dict:
+        """The comparison of the shape shown with `fresh`, a fresh placement of the problem (view.placement_comparison),
+        and, as "saved", with the problem file as saved (saving.saved_twist: its twist at assembly and how far its
+        fresh placement is from the shape shown)."""
+        comparison = placement_comparison(self.tracker.centerline, self.end_frame, fresh)
+        comparison["saved"] = saved_twist(self.problem, self.tracker.fittings, fresh, self.tracker.centerline)
+        return comparison
 
     @property
     def end_frame(self) -> np.ndarray:
@@ -268,9 +277,14 @@ class Session:
         """The shape shown as a Result (for the exports and the readouts)."""
         return self.tracker.result(self.placement.lock_angle_deg)
 
-    def problem_toml(self) -> str:
-        """The problem as a problem file (mounts, twist and hose as now)."""
-        return problem_to_toml(self.problem)
+    def problem_toml(self, assembled: bool = False) -> str:
+        """The problem as a problem file (mounts and hose as now): with the twist at assembly that places it as shown
+        (saving.saved_twist, found by a fresh placement if none was made since the last change; the twist as set
+        when no fresh placement can be made), or, `assembled`, with the twist as set (the shape "Place again" gives)."""
+        if assembled:
+            return problem_to_toml(self.problem)
+        saved = self.compare_with_placement().get("saved")
+        return problem_to_toml(self.problem if saved is None else replace(self.problem, end_twist_deg=saved["twist"]))
 
     def sweep_to_run(self) -> SweepProblem:
         """The open sweep with the hose and twist as now, at the sweep's design mounts."""

@@ -34,7 +34,10 @@ export class FittingsView {
       this.dragging = event.value;
       if (!event.value && this.afterDrag) this.afterDrag();
     });
-    this.gizmo.addEventListener('objectChange', () => this.onDrag(this.selected, this.objects[this.selected]));
+    this.gizmo.addEventListener('objectChange', () => {
+      if (this.adjust) this.adjust(this.objects[this.selected]);  // snapping (snapping.js), before it is sent
+      this.onDrag(this.selected, this.objects[this.selected]);
+    });
     this.dragging = false;
     this.selected = null;
   }
@@ -95,12 +98,12 @@ export class FittingsView {
     }
   }
 
-  /** Put the fittings and clips where a state message has them, except one the user is dragging. */
-  place(fittings, clips = []) {
+  /** Put the fittings and clips where a state message has them, except one the user is dragging (unless `dragged`). */
+  place(fittings, clips = [], dragged = false) {
     const all = { ...fittings, ...Object.fromEntries(clips.map((clip, k) => [`clip${k}`, clip])) };
     for (const [name, fitting] of Object.entries(all)) {
       if (!this.objects[name]) continue;
-      if (this.dragging && name === this.selected) continue;
+      if (this.dragging && name === this.selected && !dragged) continue;
       const [w, x, y, z] = fitting.quaternion;
       this.objects[name].position.fromArray(fitting.point);
       this.objects[name].quaternion.set(x, y, z, w);

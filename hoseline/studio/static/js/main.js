@@ -8,6 +8,12 @@ import { HoseView } from './hose.js';
 import { ObstacleView } from './obstacles.js';
 import { FittingsView } from './fittings.js';
 import { Panel } from './panel.js';
+import { EditHistory } from './history.js';
+import { Snapping } from './snapping.js';
+import { Measure } from './measure.js';
+import { focusOn } from './focus.js';
+import { Persisted } from './persist.js';
+import { SaveChoice } from './save.js';
 
 const view = document.getElementById('view');
 const studioScene = new StudioScene(view);
@@ -32,10 +38,21 @@ const panel = new Panel({
 });
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
+const toolbar = view.querySelector('.toolbar');
+const edits = new EditHistory(send, toolbar);
+const snapping = new Snapping(fittings, toolbar, view);
+const measure = new Measure(studioScene, { hose: hose.group, fitting: fittings.group, obstacle: obstacles.group }, toolbar, view);
+const persisted = new Persisted();
+let keptSelection = { selected: persisted.kept.selected, mode: persisted.kept.mode };  // put back at the first state
+new SaveChoice(document.getElementById('save'), () => state && state.comparison);
+let refused = null;  // the seq of the last message the server refused: its state puts a dragged handle back
 
 function send(message) {
-  return connection.send(message);
+  return connection.send({ ...message, edit: edits.edit });
 }
+
+/** What the kept camera belongs to: the file (its name) and the session's revision. */
+const sessionKey = () => session && `${session.revision} ${session.name}`;
 
 function receive(message) {
   if (message.type === 'session') {
@@ -48,6 +65,7 @@ function receive(message) {
   } else if (message.type === 'comparison') {
     if (state) { state.comparison = message.comparison; showSoon(state); }
   } else if (message.type === 'error') {
+    refused = message.seq;
     panel.message(message.message, true);
     playing = false;
   }
@@ -63,8 +81,11 @@ function draw(message) {
   paint();
   fittings.shapeEnds(message.pieces);
   obstacles.place(message.obstacle_poses);
-  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq) fittings.place(message.fittings, message.clips);
-  if (starting) { fitView(); starting = false; }
+  // a handle dragged past where the hose can follow stops at the last shape reached
+  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq || message.seq === refused) {
+    fittings.place(message.fittings, message.clips, message.seq === refused);
+  }
+  if (starting) { fitView(); starting = false; restoreSelection(); }
   studioScene.render();
   const drawnAt = performance.now();
   if (message.seq !== null) {
@@ -109,7 +130,7 @@ function fitView() {
   const box = hose.bounds().union(obstacles.bounds());
   for (const object of Object.values(fittings.objects)) box.expandByPoint(object.position);
   studioScene.setGround(box);
-  studioScene.view('iso');
+  if (!persisted.restoreCamera(studioScene, sessionKey())) studioScene.view('iso');
 }
 
 function showLegend(legend) {
@@ -164,7 +185,14 @@ document.querySelectorAll('[data-mode]').forEach((button) => button.addEventList
   fittings.select(fittings.selected, button.dataset.mode);
   markActive();
 }));
+/** Look at the selected fitting or clip from where the view looks now (F); with nothing selected, fit everything. */
+function focusSelected() {
+  const object = fittings.selected && fittings.objects[fittings.selected];
+  if (!object || !state) { studioScene.view('fit'); return; }
+  focusOn(studioScene, object.position, 10 * state.hose.outer_diameter);
+}
 function markActive() {
+  persisted.keep({ selected: fittings.selected, mode: fittings.gizmo.mode });
   document.querySelectorAll('[data-select]').forEach((b) => b.classList.toggle('active', b.dataset.select === (fittings.selected || 'none')));
   document.querySelectorAll('[data-mode]').forEach((b) => b.classList.toggle('active', b.dataset.mode === fittings.gizmo.mode));
 }
@@ -172,7 +200,10 @@ window.addEventListener('keydown', (event) => {
   if (event.target.tagName === 'INPUT' || event.target.tagName === 'SELECT') return;
   if (event.key === 'w') fittings.select(fittings.selected, 'translate');
   else if (event.key === 'e') fittings.select(fittings.selected, 'rotate');
-  else if (event.key === 'Escape') fittings.select(null);
+  else if (event.key === 'Escape') { fittings.select(null); measure.set(false); }
+  else if (event.key === 's') snapping.set(!snapping.on);
+  else if (event.key === 'm') measure.set(!measure.active);
+  else if (event.key === 'f') focusSelected();
   markActive();
 });
 document.getElementById('colour-map').addEventListener('change', () => { if (state) { paint(); studioScene.render(); } });
@@ -180,7 +211,7 @@ document.getElementById('colour-map').addEventListener('change', () => { if (sta
 // a click on a fitting selects it for the gizmo
 const raycaster = new THREE.Raycaster();
 studioScene.renderer.domElement.addEventListener('pointerdown', (event) => {
-  if (fittings.gizmo.axis) return;  // on the gizmo itself
+  if (fittings.gizmo.axis || measure.active) return;  // on the gizmo itself, or picking points to measure
   const rect = event.target.getBoundingClientRect();
   const pointer = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1, -((event.clientY - rect.top) / rect.height) * 2 + 1);
   raycaster.setFromCamera(pointer, studioScene.camera);
@@ -196,6 +227,22 @@ document.addEventListener('dragleave', (event) => { if (!event.relatedTarget) vi
 document.addEventListener('drop', (event) => { event.preventDefault(); view.classList.remove('dropping'); upload([...event.dataTransfer.files]); });
 fittings.select(null, 'translate');
 markActive();
+
+// what a reload keeps (persist.js): the camera, colour map, selection, gizmo mode and snapping
+studioScene.orbit.addEventListener('change', () => { if (session && !starting) persisted.keepCamera(studioScene, sessionKey()); });
+snapping.onChange = () => persisted.keep({ snapping: snapping.settings });
+if (persisted.kept.snapping) snapping.settings = persisted.kept.snapping;
+const colourMap = document.getElementById('colour-map');
+if (persisted.kept.colourMap) colourMap.value = persisted.kept.colourMap;
+colourMap.addEventListener('change', () => persisted.keep({ colourMap: colourMap.value }));
+/** Select the fitting or clip and gizmo mode kept before a reload, once, when the first state is drawn. */
+function restoreSelection() {
+  if (!keptSelection) return;
+  const { selected, mode } = keptSelection;
+  keptSelection = null;
+  fittings.select(selected && fittings.objects[selected] ? selected : null, mode || undefined);
+  markActive();
+}
 
 window.studio = {
   get state() { return state; },

@@ -221,11 +221,18 @@ export class Panel {
       badge.className = 'badge same'; badge.textContent = 'same as a fresh placement';
       badge.title = 'placing this problem afresh from the straight hose gives the shape shown';
     } else {
+      const saved = comparison.saved;
+      const signed = (x) => `${x >= 0 ? '+' : '−'}${fmt(Math.abs(x), 4)}°`;
       badge.className = 'badge differs';
       badge.textContent = `a fresh placement differs by ${fmt(comparison.distance, 3)} mm`;
-      badge.title = comparison.clocking > 1e-6
+      const why = comparison.clocking > 1e-6
         ? `the end fitting is clocked ${fmt(comparison.clocking, 3)}° from where a fresh assembly locks it: the hose was moved after assembly (it keeps its locked twist). "Place again" assembles it here.`
         : 'same fittings, another shape: the path reached another branch. "Place again" gives the placement\'s branch.';
+      const file = !saved ? ''
+        : saved.same ? ` The saved file holds the twist at assembly that places the hose as shown: ${fmt(saved.twist)}° (${signed(saved.twist_change)} on the twist as set; its fresh placement is ${fmt(saved.distance, 2)} mm from the shape shown).`
+          : ` No twist at assembly reproduces the shape shown (${saved.failed ? `the fresh placement with ${fmt(saved.twist)}° fails` : `the nearest, ${fmt(saved.twist)}° (${signed(saved.twist_change)}), places it ${fmt(saved.distance, 3)} mm off`}): "Save" asks which to keep.`;
+      if (saved && saved.same) badge.textContent += `; saved as shown (twist ${signed(saved.twist_change)})`;
+      badge.title = why + file;
     }
   }
 
