@@ -57,7 +57,8 @@ from hoseline.procedures.placement.continuation import (
     secant,
 )
 from hoseline.procedures.placement.hose_health import hose_health
-from hoseline.procedures.placement.sequence import rod_properties, solve, weight_vector
+from hoseline.procedures.placement.path import weight_vector
+from hoseline.procedures.placement.sequence import rod_properties, solve
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.sweep.result import ObstacleClearance, Snap, SweepContact, SweepResult
 
