@@ -27,7 +27,7 @@ import numpy as np
 from hoseline.io.atomic import write_bytes, write_text
 from hoseline.io.problem_file import _toml_value, problem_to_dict, problem_to_toml
 from hoseline.io.results import _json, _plain
-from hoseline.io.sweep_results import _cell
+from hoseline.io.csv_numbers import cell
 from hoseline.procedures.variation.statistics import PERCENTILES
 from hoseline.procedures.variation.study import Study, StudyOutcome
 
@@ -87,7 +87,7 @@ def _table(columns: dict[str, list | np.ndarray]) -> str:
     writer.writerow(columns)
     length = len(next(iter(columns.values()))) if columns else 0
     for k in range(length):
-        writer.writerow(_cell(values[k]) for values in columns.values())
+        writer.writerow(cell(values[k]) for values in columns.values())
     return stream.getvalue()
 
 

@@ -36,20 +36,12 @@ from dataclasses import replace
 import numpy as np
 
 from hoseline.compilation import PACKAGE, compiling, is_compiled, persistent, version_folder
-from hoseline.mechanics.contact_motion import moved_model
-from hoseline.mechanics.energy import BANDWIDTH
-from hoseline.mechanics.newton import RodProperties, solve_equilibrium
-from hoseline.mechanics.rod import Clamps, RodState, centerline
-from hoseline.mechanics.rotations import rotate_frames
-from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model import Hose, Mount, Problem
 from hoseline.model.clips import Clip
-from hoseline.model.motion import Pose
 from hoseline.model.obstacles import Box, Cylinder, Mesh, Plane, Sphere
-from hoseline.model.stiffeners import thesis_preset
-from hoseline.procedures.contact.placement import problem_contact_model
-from hoseline.procedures.geometry.clearance import TriangleIndex
-from hoseline.procedures.placement.sequence import solve
+
+# The solver's modules are imported by the functions that compile them: a run that finds its parts compiled
+# (kernels_compiled) loads none of them here, only those it uses.
 
 # The thesis brake hose, coarse: 16 segments give 48 unknowns, above the 40 from which the
 # stability check runs its compiled iteration instead of a dense eigen-decomposition.
@@ -97,6 +89,13 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
     """Compile, or load from the cache, every kernel of a placement; with `clearance` those of a
     clearance query, with `stiffeners` those of a placement with stiffener springs, with `clips`
     those of a placement with clips, with `contact` those of a placement with contact."""
+    from hoseline.mechanics.contact_motion import moved_model
+    from hoseline.model.motion import Pose
+    from hoseline.model.stiffeners import thesis_preset
+    from hoseline.procedures.contact.placement import problem_contact_model
+    from hoseline.procedures.geometry.clearance import TriangleIndex
+    from hoseline.procedures.placement.sequence import solve
+
     with compiling("placement"):
         if not is_compiled("placement"):
             with _second_process("stability_kernels"):
@@ -126,6 +125,8 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
 
 def small_clips() -> tuple[Clip, Clip]:
     """A fixed clip a third along SMALL_PLACEMENT's shape and a sliding one two thirds along (where they sit)."""
+    from hoseline.procedures.placement.sequence import solve
+
     placed = solve(SMALL_PLACEMENT, estimate_error=False)
     h = SMALL_PLACEMENT.hose.segment_length
     held = []
@@ -145,6 +146,10 @@ def kernels_compiled(clearance: bool = False, stiffeners: bool = False, clips: b
 
 def newton_kernels() -> None:
     """Compile the Newton iteration, both kinds (solve_equilibrium), on a small bent hose."""
+    from hoseline.mechanics.newton import RodProperties, solve_equilibrium
+    from hoseline.mechanics.rod import Clamps, RodState, centerline
+    from hoseline.mechanics.rotations import rotate_frames
+
     segments = 16
     bend = np.outer(np.linspace(0.0, 1.0, segments), [0.2, 0.0, 0.0])  # rad about x, growing along the hose
     frames = rotate_frames(np.tile(np.eye(3), (segments, 1, 1)), bend)
@@ -158,6 +163,9 @@ def newton_kernels() -> None:
 def stability_kernels() -> None:
     """Compile the stability check (smallest_eigenpairs) on a made-up Hessian of 48 unknowns, enough
     for its compiled iteration."""
+    from hoseline.mechanics.energy import BANDWIDTH
+    from hoseline.mechanics.stability import smallest_eigenpairs
+
     unknowns = 48
     band = np.zeros((unknowns, BANDWIDTH + 1))
     band[:, 0] = np.arange(1.0, unknowns + 1.0)
