@@ -3,7 +3,8 @@
 Every command runs once in a fresh interpreter, which lists the modules it has loaded when it exits.  A plain solve
 loads no mesh, CAD, plotting, image, cluster or web library and no SciPy module it does not call (scipy.linalg is
 loaded by Numba itself, for its BLAS and LAPACK bindings, when it loads the first kernel); a sweep without meshes
-loads no mesh or CAD library (it writes its envelope's STL itself); a compare no mesh, CAD or image library.
+loads no mesh or CAD library (it writes its envelope's STL itself) and, without contact, none of the contact
+solver's SciPy modules; a compare no mesh, CAD or image library.
 A module-level import anywhere on a command's way breaks this unseen, hence the test.
 """
 
@@ -53,10 +54,11 @@ def test_a_plain_solve_loads_no_heavy_library(tmp_path):
 
 
 def test_a_sweep_without_meshes_loads_no_mesh_or_cad_library(tmp_path):
-    toml = THESIS_TOML.replace("[end]\n", '[end]\nbody = "knuckle"\n') + '[[bodies]]\nname = "knuckle"\nposes = "knuckle.csv"\n'
+    bodies = '[[bodies]]\nname = "knuckle"\nposes = "knuckle.csv"\n'
+    toml = THESIS_TOML.replace("[end]\n", '[end]\nbody = "knuckle"\n') + bodies
     write(tmp_path / "knuckle.csv", KNUCKLE_CSV)
     sweep = write(tmp_path / "sweep.toml", toml)
-    watched = MESH_CAD_IMAGE[:3] + CLUSTER_WEB + ["scipy.interpolate", "scipy.optimize", "scipy.spatial"]
+    watched = MESH_CAD_IMAGE[:3] + CLUSTER_WEB + FITTING[:4]  # SciPy's interpolate, optimize, sparse, spatial
     assert loaded(tmp_path, watched, "sweep", sweep, "-o", tmp_path / "out", "--quiet") == []
     assert (tmp_path / "out" / "envelope.stl").read_bytes()[:6] != b"solid "  # binary, written without trimesh
 
