@@ -7,7 +7,9 @@ placement uses; with clearance=True it also asks a clearance query (sweeps), wit
 stiffeners=True it places the hose with the thesis' stiffener springs (their kernels take other
 argument types), with clips=True a hose held by a fixed and a sliding clip, with contact=True a
 heavy hose that snaps down onto a floor (the contact Newton, its downhill mode and step filter,
-with every kind of obstacle and self-contact).  `hoseline compile` compiles every part; the
+with every kind of obstacle and self-contact), with preset=True the hose with a set (model/preset.py: its
+rest rotations are another argument type), with braid=True the hose with a braid (mechanics/braid.py).
+A hose with two of springs, a set and a braid at once compiles its combination on its first run.  `hoseline compile` compiles every part; the
 Makefile runs it when it installs hoseline, as an ahead-of-time build would, so that the first
 run after `make` compiles nothing.
 
@@ -38,7 +40,9 @@ import numpy as np
 from hoseline.compilation import PACKAGE, compiling, is_compiled, persistent, version_folder
 from hoseline.model import Hose, Mount, Problem
 from hoseline.model.clips import Clip
+from hoseline.model.braid import Braid
 from hoseline.model.obstacles import Box, Cylinder, Mesh, Plane, Sphere
+from hoseline.model.preset import Preset
 
 # The solver's modules are imported by the functions that compile them: a run that finds its parts compiled
 # (kernels_compiled) loads none of them here, only those it uses.
@@ -51,6 +55,10 @@ SMALL_PLACEMENT = Problem(
     Mount([-173.064, -7.0, -11.25], [1.0, 0.0, 0.0]),
     180.0,
 )
+
+
+SMALL_PRESET = Preset(curvature=1.0 / 250.0, angle_deg=-40.0)  # a set of 250 mm radius
+SMALL_BRAID = Braid(angle_deg=38.0, strands=12, strand_axial_stiffness=1500.0, slack_strain=0.005)  # strands engage
 
 
 def _grid_sheet(cells: int, corner: list[float], size: float) -> Mesh:
@@ -85,10 +93,11 @@ CONTACT_PLACEMENT = Problem(
 
 
 def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bool = False,
-                    contact: bool = False) -> None:
+                    contact: bool = False, preset: bool = False, braid: bool = False) -> None:
     """Compile, or load from the cache, every kernel of a placement; with `clearance` those of a
     clearance query, with `stiffeners` those of a placement with stiffener springs, with `clips`
-    those of a placement with clips, with `contact` those of a placement with contact."""
+    those of a placement with clips, with `contact` those of a placement with contact, with `preset`
+    those of a hose with a set, with `braid` those of a braided hose."""
     from hoseline.mechanics.contact_motion import moved_model
     from hoseline.model.motion import Pose
     from hoseline.model.stiffeners import thesis_preset
@@ -121,6 +130,12 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
             small.pairs(np.linspace([0.0, 0.0, 100.0], [150.0, 0.0, 100.0], 17), small.activation)
             model = problem_contact_model(CONTACT_PLACEMENT)  # a sweep's obstacles moved with their bodies
             moved_model(model, [Pose(position=np.array([1.0, 0.0, 0.0]))] * len(model.names))
+    if preset:
+        with compiling("preset"):
+            solve(replace(SMALL_PLACEMENT, hose=replace(SMALL_PLACEMENT.hose, preset=SMALL_PRESET)))
+    if braid:
+        with compiling("braid"):
+            solve(replace(SMALL_PLACEMENT, hose=replace(SMALL_PLACEMENT.hose, braid=SMALL_BRAID)))
 
 
 def small_clips() -> tuple[Clip, Clip]:
@@ -137,10 +152,11 @@ def small_clips() -> tuple[Clip, Clip]:
 
 
 def kernels_compiled(clearance: bool = False, stiffeners: bool = False, clips: bool = False,
-                     contact: bool = False) -> bool:
-    """Whether compile_kernels(clearance, stiffeners, clips, contact) has already filled the cache for this
-    version and CPU."""
-    wanted = {"placement": True, "clearance": clearance, "stiffeners": stiffeners, "clips": clips, "contact": contact}
+                     contact: bool = False, preset: bool = False, braid: bool = False) -> bool:
+    """Whether compile_kernels(clearance, stiffeners, clips, contact, preset, braid) has already filled the cache
+    for this version and CPU."""
+    wanted = {"placement": True, "clearance": clearance, "stiffeners": stiffeners, "clips": clips, "contact": contact,
+              "preset": preset, "braid": braid}
     return all(is_compiled(part) for part, asked in wanted.items() if asked)
 
 
