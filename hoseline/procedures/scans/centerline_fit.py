@@ -296,7 +296,9 @@ def _fit_sections(cloud: VoxelCloud, guide: np.ndarray, radius: float, section: 
             counts = cloud.counts[near]
             total = counts.sum()
             if total >= MIN_SECTION_POINTS and min(counts[along < 0].sum(), counts[along > 0].sum()) >= 0.25 * total:
-                fits.append((index, fit_cylinder(cloud.points[near], counts, centre, tangent, radius)))
+                fit = fit_cylinder(cloud.points[near], counts, centre, tangent, radius)
+                if np.linalg.norm(fit["axis_point"] - centre) <= reach:  # else an axis away from its points: astray
+                    fits.append((index, fit))
             # else: too few points, or points on one side of the station only (an end): no station
         fixed_radius = np.median([f["radius"] for _, f in fits if f["radius_fitted"]] or [radius])
         fits = [(i, fit_cylinder(f["points"], f["weights"], f["axis_point"], f["tangent"], fixed_radius, False))
