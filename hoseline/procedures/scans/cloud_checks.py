@@ -16,6 +16,7 @@ import numpy as np
 MIN_DISTINCT = 25  # distinct points at the coarse grid a hose scan shows at least (one section's worth)
 FLAT_FRACTION = 0.1  # of the radius: a cloud thinner than this across its best line or plane is flat
 MIN_IN_REACH = 0.5  # of the points: at least this many must lie where the hose can be
+REACH_SAMPLE = 100_000  # points the share in reach is counted on
 
 
 def check_count(distinct: np.ndarray, radius: float, grid: float) -> None:
@@ -45,7 +46,9 @@ def check_spread(distinct: np.ndarray, radius: float) -> None:
 def check_reach(points: np.ndarray, start: np.ndarray, end: np.ndarray, reach: float) -> None:
     """Raise ValueError when fewer than MIN_IN_REACH of the scan's points (n, 3) lie within `reach` mm (the hose's
     length and outer radius, with its fittings) of both mounts `start` and `end` (mm), where a hose held by them
-    can be."""
+    can be.  The share is counted on an even subsample of at most REACH_SAMPLE points (a scan of millions needs no
+    more, nor its memory for the distances)."""
+    points = points[:: max(1, points.shape[0] // REACH_SAMPLE)]
     near = (np.linalg.norm(points - start, axis=1) <= reach) & (np.linalg.norm(points - end, axis=1) <= reach)
     if np.mean(near) < MIN_IN_REACH:
         centre = np.median(points, axis=0)
