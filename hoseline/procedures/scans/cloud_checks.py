@@ -5,8 +5,8 @@ coarse grid of centerline_fit.py), spread across the hose by about r in every di
 to it (r/sqrt(2) all round, about r/3 from one side).  A cloud with too few distinct points (a
 point repeated, a scan in metres rather than mm), or one whose points lie on a line or a plane
 (rms distance from their best line or plane below FLAT_FRACTION of r, once isolated outliers are
-dropped), gives the fit nothing to find; a cloud out of the hose's reach of the problem's mounts is of another part, or in other
-coordinates.  Units: mm.
+dropped), gives the fit nothing to find; a cloud out of the hose's reach of the problem's mounts
+is of another part, or in other coordinates.  Units: mm.
 """
 
 from __future__ import annotations
