@@ -261,3 +261,26 @@ def test_hoseline_compile_compiles_every_part(monkeypatch):
     assert calls == [{"clearance": True, "stiffeners": True, "clips": True, "contact": True, "preset": True,
                       "braid": True}]
     assert "the solver is compiled" in result.output
+
+
+def test_a_plain_placement_loads_only_the_placements_kernels():
+    """Kernels load per part the problem uses: placing the demo hose (no clips, springs, set, braid or contact)
+    loads no kernel of the clipped rod, the stiffener springs' own, the braid's or contact's, and no contact module
+    is imported at all; a clipped placement then loads the clipped rod's."""
+    code = SIGNATURES + textwrap.dedent("""
+        from dataclasses import replace
+        from hoseline.demos.thesis_hose import demo_problem
+        from hoseline.procedures.compile_kernels import SMALL_PLACEMENT, small_clips
+        from hoseline.procedures.placement.sequence import solve
+
+        solve(demo_problem(180.0))
+        parts = ("clipped", "bordered", "stiffeners", "braid", "contact", "proximity", "self_pairs", "leaf_lists")
+        def loaded():
+            return sorted({kernel.split(".")[2] for kernel, _ in signatures() if kernel.split(".")[2].startswith(parts)})
+        print(loaded(), sorted(name for name in sys.modules if "contact" in name))
+        solve(replace(SMALL_PLACEMENT, clips=small_clips()), estimate_error=False)
+        print(loaded())
+    """)
+    cache = numba.config.CACHE_DIR or compilation.version_folder().parent
+    assert run_python(code, compilation.PACKAGE.parent, cache).splitlines() == [
+        "[] []", "['bordered', 'clipped']"]
