@@ -31,7 +31,8 @@ from hoseline.demos.thesis_hose import demo_problem  # noqa: E402
 from hoseline.mechanics.newton import _step_kernel, evaluate  # noqa: E402
 from hoseline.mechanics.rod import RodState  # noqa: E402
 from hoseline.model.clips import Clip  # noqa: E402
-from hoseline.procedures.placement.sequence import PlacementPath, rod_properties, solve  # noqa: E402
+from hoseline.procedures.placement.path import PlacementPath  # noqa: E402
+from hoseline.procedures.placement.sequence import rod_properties, solve  # noqa: E402
 
 
 def iteration_time(problem, result, repeats: int) -> float:

@@ -308,7 +308,8 @@ def test_stability_margin_with_clips_matches_the_dense_projected_eigenvalue(plac
 
     from hoseline.mechanics.newton import evaluate as evaluate_any
     from hoseline.mechanics.stability import smallest_eigenpairs
-    from hoseline.procedures.placement.sequence import PlacementPath, rod_properties
+    from hoseline.procedures.placement.path import PlacementPath
+    from hoseline.procedures.placement.sequence import rod_properties
 
     problem = _clipped_problem("rotating")
     problem = Problem(_hose(400.0, 80), problem.start, problem.end, end_twist_deg=90.0, gravity=GRAVITY,
@@ -356,7 +357,8 @@ def test_minimising_newton_walks_a_disturbed_clipped_hose_back_to_a_stable_equil
     frame turned at random by up to ~0.2 rad, it ends converged, stable, at lower energy than it started."""
     from hoseline.mechanics.newton import solve_equilibrium, total_energy
     from hoseline.mechanics.rotations import rotate_frames
-    from hoseline.procedures.placement.sequence import PlacementPath, rod_properties
+    from hoseline.procedures.placement.path import PlacementPath
+    from hoseline.procedures.placement.sequence import rod_properties
 
     problem = _clipped_problem("fixed")
     result = placed["fixed"]

@@ -11,7 +11,8 @@ from hoseline.model.clips import Clip
 from hoseline.model.hose import Hose
 from hoseline.model.mounts import Mount
 from hoseline.model.problem import Problem
-from hoseline.procedures.placement.sequence import rod_properties, solve, weight_vector
+from hoseline.procedures.placement.path import weight_vector
+from hoseline.procedures.placement.sequence import rod_properties, solve
 from tests.test_energy_derivatives import dense, random_frames
 
 

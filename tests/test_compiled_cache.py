@@ -149,12 +149,13 @@ def test_the_made_up_arrays_of_the_parallel_compile_have_a_placements_types():
     a placement uses with the argument types it uses: the placement then adds no signature to them."""
     code = SIGNATURES + textwrap.dedent("""
         from hoseline.procedures import compile_kernels
+        from hoseline.procedures.placement.sequence import solve
 
         compile_kernels.newton_kernels()
         compile_kernels.stability_kernels()
         covered = signatures()
         kernels = {kernel for kernel, _ in covered}
-        compile_kernels.solve(compile_kernels.SMALL_PLACEMENT)
+        solve(compile_kernels.SMALL_PLACEMENT)
         print(sorted((kernel, types) for kernel, types in signatures() - covered if kernel in kernels))
         print(sorted(kernel.rsplit(".", 1)[1] for kernel in kernels if kernel.rsplit(".", 1)[1] in
                      ("_track_kernel", "_minimise_kernel", "_subspace_iteration")))
@@ -169,7 +170,8 @@ def test_placements_after_compile_kernels_need_no_other_kernel(tmp_path):
     placement uses: the demo hose at 100 segments then adds no signature to any kernel, nor does
     the hose with stiffener springs twisted by 45 degrees after compile_kernels(stiffeners=True),
     nor, after compile_kernels(clips=True, contact=True), a hose held by clips and the heavy hose
-    that snaps onto the floor at 40 segments, with its obstacles and without the large mesh among them.  (Counting signatures, not compilations: a kernel loaded from the cache would have compiled on
+    that snaps onto the floor at 40 segments, with its obstacles and without the large mesh among them, nor,
+    after compile_kernels(preset=True, braid=True), the demo hose with a set and with a braid at 0 and 180 degrees.  (Counting signatures, not compilations: a kernel loaded from the cache would have compiled on
     a fresh installation.)"""
     code = SIGNATURES + textwrap.dedent("""
         from dataclasses import replace
@@ -197,10 +199,19 @@ def test_placements_after_compile_kernels_need_no_other_kernel(tmp_path):
         solve(heavy, estimate_error=False)
         solve(replace(heavy, contact=heavy.contact[:-1]), estimate_error=False)  # small meshes only: no leaf lists
         print(sorted(signatures() - before), kernels_compiled(clips=True, contact=True))
+        compile_kernels(preset=True, braid=True)
+        before = signatures()
+        from hoseline.model.braid import Braid
+        from hoseline.model.preset import Preset
+        for twist in (0.0, 180.0):
+            plain = demo_problem(twist)
+            solve(replace(plain, hose=replace(plain.hose, preset=Preset(1.0 / 300.0, 25.0))))
+            solve(replace(plain, hose=replace(plain.hose, braid=Braid(30.0, 16, 2500.0, 0.01, 4.0))))
+        print(sorted(signatures() - before), kernels_compiled(preset=True, braid=True))
     """)
     cache = numba.config.CACHE_DIR or compilation.version_folder().parent  # the session's: compiled once
     source = compilation.PACKAGE.parent
-    assert run_python(code, source, cache).splitlines() == ["[]", "[] True", "[] True"]
+    assert run_python(code, source, cache).splitlines() == ["[]", "[] True", "[] True", "[] True"]
 
 
 @pytest.mark.parametrize("compiled", [False, True])
@@ -238,7 +249,7 @@ def test_a_problem_with_clips_and_contact_compiles_their_parts_first(tmp_path, m
     result = CliRunner().invoke(cli.app, ["solve", str(problem), "-o", str(tmp_path / "out"), "--export", "none"])
     assert result.exit_code == 0, result.output
     assert common.FIRST_RUN in result.output
-    assert calls == [{"stiffeners": False, "clips": False, "contact": True}]
+    assert calls == [{"stiffeners": False, "clips": False, "contact": True, "preset": False, "braid": False}]
 
 
 def test_hoseline_compile_compiles_every_part(monkeypatch):
@@ -247,5 +258,29 @@ def test_hoseline_compile_compiles_every_part(monkeypatch):
     monkeypatch.setattr(compile_kernels, "compile_kernels", lambda **parts: calls.append(parts))
     result = CliRunner().invoke(cli.app, ["compile"])
     assert result.exit_code == 0, result.output
-    assert calls == [{"clearance": True, "stiffeners": True, "clips": True, "contact": True}]
+    assert calls == [{"clearance": True, "stiffeners": True, "clips": True, "contact": True, "preset": True,
+                      "braid": True}]
     assert "the solver is compiled" in result.output
+
+
+def test_a_plain_placement_loads_only_the_placements_kernels():
+    """Kernels load per part the problem uses: placing the demo hose (no clips, springs, set, braid or contact)
+    loads no kernel of the clipped rod, the stiffener springs' own, the braid's or contact's, and no contact module
+    is imported at all; a clipped placement then loads the clipped rod's."""
+    code = SIGNATURES + textwrap.dedent("""
+        from dataclasses import replace
+        from hoseline.demos.thesis_hose import demo_problem
+        from hoseline.procedures.compile_kernels import SMALL_PLACEMENT, small_clips
+        from hoseline.procedures.placement.sequence import solve
+
+        solve(demo_problem(180.0))
+        parts = ("clipped", "bordered", "stiffeners", "braid", "contact", "proximity", "self_pairs", "leaf_lists")
+        def loaded():
+            return sorted({kernel.split(".")[2] for kernel, _ in signatures() if kernel.split(".")[2].startswith(parts)})
+        print(loaded(), sorted(name for name in sys.modules if "contact" in name))
+        solve(replace(SMALL_PLACEMENT, clips=small_clips()), estimate_error=False)
+        print(loaded())
+    """)
+    cache = numba.config.CACHE_DIR or compilation.version_folder().parent
+    assert run_python(code, compilation.PACKAGE.parent, cache).splitlines() == [
+        "[] []", "['bordered', 'clipped']"]

@@ -110,7 +110,7 @@ def test_a_roll_locked_on_the_cushion_is_another_problem(strut_case, without_cus
         return cushion.follow_contact(phase, path, props, state, model.with_activation(1.0),
                                       start=options["start"], control=options["control"], log=options["log"])[0]
 
-    monkeypatch.setattr("hoseline.procedures.placement.sequence.follow_on_cushion", not_narrowed)
+    monkeypatch.setattr(cushion, "follow_on_cushion", not_narrowed)  # the placement imports it where it calls it
     locked_on_cushion = solve(strut_case, estimate_error=False)
     assert np.max(np.abs(locked_on_cushion.centerline - without_cushion.centerline)) > 1e-3
 

@@ -12,10 +12,10 @@ from typer.testing import CliRunner
 
 from hoseline import cli
 from hoseline.io.problem_file import ProblemFileError, problem_from_dict, problem_to_dict, problem_to_toml
-from hoseline.model.fittings import EndFittings, Fitting, fitted_problem
+from hoseline.model.fittings import EndFittings, Fitting
 from hoseline.model.hose import Hose
 from hoseline.model.mounts import Mount
-from hoseline.model.problem import Problem
+from hoseline.model.problem import Problem, fitted_problem
 from hoseline.procedures.geometry.clearance import TriangleIndex, nearest_with_fittings
 from hoseline.procedures.placement.sequence import solve
 

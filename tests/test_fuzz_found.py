@@ -118,7 +118,8 @@ def test_a_division_by_zero_in_the_compiled_newton_is_a_failed_solve_not_a_trace
     from hoseline.demos.thesis_hose import demo_problem
     from hoseline.mechanics import newton
     from hoseline.mechanics.rod import RodState
-    from hoseline.procedures.placement.sequence import PlacementPath, rod_properties
+    from hoseline.procedures.placement.path import PlacementPath
+    from hoseline.procedures.placement.sequence import rod_properties
 
     def divides_by_zero(*args):
         raise ZeroDivisionError("division by zero")

@@ -174,3 +174,16 @@ def test_a_bending_stiffness_no_material_of_that_diameter_has_is_refused(thesis_
     thesis_dict["hose"].update(bending_stiffness=bending, outer_diameter=diameter)
     with pytest.raises(ProblemFileError, match=rf"needs a solid rod of Young.s modulus {re.escape(modulus)} N/mm\^2 .*check the units"):
         problem_from_dict(thesis_dict)
+
+
+@pytest.mark.parametrize("levels", [400, 100_000])
+def test_deeply_nested_arrays_are_refused_naming_the_file(tmp_path, levels):
+    """Fuzzing found `[[[[...]]]]` ending in RecursionError: in tomllib beyond ~500 levels, in the validation's
+    message below that; the readers of problem, sweep and study files all refuse it as bad input."""
+    from hoseline.io.study_file import StudyFileError, load_study
+    from hoseline.io.sweep_file import SweepFileError, load_sweep
+
+    path = write(tmp_path / "deep.toml", THESIS_TOML.replace("length = 330.6", "length = " + "[" * levels + "]" * levels))
+    for load, error in ((load_problem, ProblemFileError), (load_sweep, SweepFileError), (load_study, StudyFileError)):
+        with pytest.raises(error, match=f"{re.escape(str(path))}: arrays or tables nested more than 16 levels deep"):
+            load(path)

@@ -514,3 +514,12 @@ def test_clip_targets_are_checked_and_coalesce():
                                            {"type": "set", "seq": k, "clips": [{"point": [k, 0, 0], "quaternion": quaternion}]})))
     merged = asyncio.run(inbox.get(0.0))
     assert merged.clips[0].point == [2.0, 0.0, 0.0] and merged.pose is None and inbox.coalesced == 2
+
+
+def test_a_message_nested_too_deeply_is_refused():
+    """json.loads recurses once per level: a message of nested arrays within the size limit is a MessageError,
+    not a RecursionError."""
+    from hoseline.studio.messages import MessageError
+
+    with pytest.raises(MessageError, match="nested too deeply"):
+        parse_message('{"type": "set", "seq": 1, "clips": ' + "[" * 30_000 + "]" * 30_000 + "}")

@@ -193,9 +193,10 @@ def test_a_pose_solved_without_the_step_filter_is_the_one_the_filtered_newton_re
     lifters pushing the hose up take it where they do not start inside it, and end at every pose where the filtered
     Newton and the continuation end without it (to 1e-9 L).  The thin plate above guards the check: taken without
     it, the plate jumps across the hose."""
+    from hoseline.mechanics import contact_newton  # the sweep imports solve_with_contact where it calls it
     from hoseline.procedures.sweep import quasi_static
 
-    solve = quasi_static.solve_with_contact
+    solve = contact_newton.solve_with_contact
     tries = []
 
     def counted(*args, **options):
@@ -209,18 +210,18 @@ def test_a_pose_solved_without_the_step_filter_is_the_one_the_filtered_newton_re
             return args[2], quasi_static.NewtonReport(False, 0, float("inf"), -1, "left out")
         return solve(*args, **options)
 
-    monkeypatch.setattr(quasi_static, "solve_with_contact", counted)
+    monkeypatch.setattr(contact_newton, "solve_with_contact", counted)
     run_sweep(carried_drum.sweep)
     # refused at poses 1 and 9 (the lift's first), and the pose after each solved without a try (waiting 2^1 - 1)
     assert tries == [True] + [False] + [True] * 6 + [False] + [True] * 3
     assert [stage.first for stage in carried_drum.sweep.stages] == [0, 9] and carried_drum.sweep.pose_count == 14
     for obstacle in LIFTERS.values():
         sweep = sweep_from_dict(sagging(obstacle, steps=10))
-        monkeypatch.setattr(quasi_static, "solve_with_contact", counted)
+        monkeypatch.setattr(contact_newton, "solve_with_contact", counted)
         tries.clear()
         first = run_sweep(sweep)
         assert any(tries)  # taken at some poses, refused at others (the lifter starts inside the hose)
-        monkeypatch.setattr(quasi_static, "solve_with_contact", never)
+        monkeypatch.setattr(contact_newton, "solve_with_contact", never)
         filtered = run_sweep(sweep)
         np.testing.assert_allclose(first.centerlines, filtered.centerlines, atol=1e-9 * LENGTH)
         np.testing.assert_allclose(first.contacts[0].total_force, filtered.contacts[0].total_force, atol=1e-9 * WEIGHT)

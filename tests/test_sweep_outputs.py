@@ -11,7 +11,8 @@ import trimesh
 from sweep_cases import small_sweep_report, small_sweep_result  # noqa: F401 (fixtures)
 from test_sweep import SWEEP_TOML, run, sweep_folder
 
-from hoseline.io.sweep_results import shapes_csv, without_round_off
+from hoseline.io.csv_numbers import without_round_off
+from hoseline.io.sweep_results import shapes_csv
 from hoseline.procedures.geometry.clearance import TriangleIndex
 from hoseline.report.sweep_figures import view_figure
 from hoseline.report.sweep_html import sweep_report_html

@@ -66,7 +66,7 @@ def calibrate_command(
         raise fail(f"--fit {fit!r}: {exc}", BAD_INPUT) from None
     clouds = [load_scan(path) for path in scans]
     with errors_to_exit_codes(out):
-        compile_solver(quiet)
+        compile_solver(quiet, problem)
         fits = [fitted(cloud, problem, path) for cloud, path in zip(clouds, scans)]
         calibration = calibrate(problem, [ScanCase(angle, f.points) for angle, f in zip(twists, fits)], names,
                                 poisson_ratio=poisson_ratio, thresholds=limits)

@@ -50,7 +50,8 @@ NO_CACHE = "compiling the solver (no writable cache folder: every run compiles; 
 def solver_parts(problem) -> dict[str, bool]:
     """The parts of the solver (procedures/compile_kernels.py) that placing `problem` uses beyond a plain placement."""
     return {"stiffeners": problem.hose.stiffeners is not None, "clips": bool(problem.clips),
-            "contact": problem.has_contact}
+            "contact": problem.has_contact, "preset": problem.hose.preset is not None,
+            "braid": problem.hose.braid is not None}
 
 
 def compile_solver(quiet: bool, problem=None, **parts: bool) -> None:

@@ -45,7 +45,7 @@ def compare_command(
     clouds = [load_scan(path) for path in scans]
     references = None if reference_points is None else load_scan(reference_points, "reference points", min_points=1)
     with errors_to_exit_codes(out):
-        compile_solver(quiet)
+        compile_solver(quiet, problem)
         fits = [fitted(cloud, problem, path) for cloud, path in zip(clouds, scans)]
         results = placed(problem, twists)
         comparisons = []

@@ -9,12 +9,12 @@ from rich.console import Console
 
 from hoseline.commands.common import QUIET_HELP, compile_solver
 
-PARTS = ("clearance", "stiffeners", "clips", "contact")  # beyond the plain placement (compile_kernels)
+PARTS = ("clearance", "stiffeners", "clips", "contact", "preset", "braid")  # beyond the plain placement (compile_kernels)
 
 
 def compile_command(quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP)) -> None:
     """Compile the solver's kernels for every kind of problem (placement, clearance, stiffener springs, clips,
-    contact) into this installation's cache, so that no later run waits for the compiler."""
+    contact, preset, braid) into this installation's cache, so that no later run waits for the compiler."""
     from hoseline.compilation import persistent, version_folder
 
     started = time.perf_counter()

@@ -48,11 +48,15 @@ def scan_twists(given: list[float] | None, count: int, problem) -> list[float]:
 
 
 def fitted(cloud, problem, path: Path):
-    """The scan's fitted centreline; a cloud that is no hose is bad input."""
+    """The scan's fitted centreline; a cloud that is no hose, or not where the problem's hose can be, is bad input."""
     from hoseline.procedures.scans.centerline_fit import fit_centerline
+    from hoseline.procedures.scans.cloud_checks import check_reach
 
+    hose = problem.hose
+    fittings = 0.0 if problem.fittings is None else problem.fittings.length_allowance
     try:
-        return fit_centerline(cloud, problem.hose.outer_radius, start_hint=problem.start.point)
+        check_reach(cloud, problem.start.point, problem.end.point, hose.length + hose.outer_radius + fittings)
+        return fit_centerline(cloud, hose.outer_radius, start_hint=problem.start.point)
     except ValueError as exc:
         raise fail(f"scan {path}: {exc}", BAD_INPUT) from None
 

@@ -42,10 +42,8 @@ def solve_command(
     hysteresis.csv with --hysteresis)."""
     from hoseline.io.atomic import staged_directory
     from hoseline.io.exports import write_exports
-    from hoseline.io.hysteresis_csv import HYSTERESIS_FILE, write_hysteresis
     from hoseline.io.problem_file import ProblemFileError, load_problem
     from hoseline.io.results import write_results
-    from hoseline.procedures.placement.hysteresis import hysteresis_band
     from hoseline.procedures.placement.refinement import solve_to_accuracy
     from hoseline.procedures.placement.sequence import solve
     from hoseline.report.table import summary_table
@@ -68,12 +66,13 @@ def solve_command(
                 result = solve(problem, progress=progress)
             else:
                 result = solve_to_accuracy(problem, wanted, progress=progress)
-        band = None if largest_twist is None else hysteresis_band(problem, largest_twist, hysteresis_step(largest_twist),
-                                                                  friction_threshold)
+        band = None if largest_twist is None else twisted_band(problem, largest_twist, friction_threshold)
         with staged_directory(out) as staging:
             write_results(result, staging)
             exported = write_exports(result, staging, formats)
             if band is not None:
+                from hoseline.io.hysteresis_csv import write_hysteresis
+
                 write_hysteresis(band, staging)
     if not quiet:
         Console().print(summary_table([result], [problem.name]))
@@ -84,6 +83,8 @@ def solve_command(
             print_hysteresis(band, largest_twist, friction_threshold)
         Console().print(f"wrote {out / 'centerline.csv'} and {out / 'result.json'}")
         if band is not None:
+            from hoseline.io.hysteresis_csv import HYSTERESIS_FILE
+
             Console().print(f"wrote {out / HYSTERESIS_FILE}", soft_wrap=True)
         print_exports(out, exported)
 
@@ -113,6 +114,14 @@ def _number(text: str, unit: str) -> float:
         return float(text.strip().lower().removesuffix(unit).strip())
     except ValueError:
         return math.nan
+
+
+def twisted_band(problem, largest_twist_deg: float, friction_threshold: float | None):
+    """The hysteresis band of --hysteresis (procedures/placement/hysteresis.py): the placed hose twisted to
+    `largest_twist_deg` (degrees) and back in steps of hysteresis_step; friction_threshold: N*mm or None."""
+    from hoseline.procedures.placement.hysteresis import hysteresis_band
+
+    return hysteresis_band(problem, largest_twist_deg, hysteresis_step(largest_twist_deg), friction_threshold)
 
 
 def hysteresis_step(largest_twist_deg: float) -> float:

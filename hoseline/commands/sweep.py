@@ -24,7 +24,6 @@ def sweep_command(
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
 ) -> None:
     """Carry the hose through the motion of its mounts; write report.html, PNGs, envelope.stl and the numbers."""
-    from hoseline.demos.sweep import demo_sweep
     from hoseline.io.sweep_file import SweepFileError, load_sweep
     from hoseline.procedures.sweep.quasi_static import run_sweep
     from hoseline.report.sweep_report import write_sweep_report
@@ -32,6 +31,8 @@ def sweep_command(
     if (sweep_file is None) == (not demo):
         raise fail("give either a sweep file or --demo (not both)", BAD_INPUT)
     if demo:
+        from hoseline.demos.sweep import demo_sweep  # the demo's strut is made with trimesh: only for the demo
+
         sweep, text = demo_sweep(), ""
     else:
         sweep = read_input(load_sweep, sweep_file, "sweep file", (SweepFileError,))

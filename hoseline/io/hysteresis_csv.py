@@ -10,10 +10,13 @@ from __future__ import annotations
 import csv
 import io
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from hoseline.io.atomic import write_text
-from hoseline.io.sweep_results import _cell, without_round_off
-from hoseline.procedures.placement.hysteresis import HysteresisBand
+from hoseline.io.csv_numbers import cell, without_round_off
+
+if TYPE_CHECKING:
+    from hoseline.procedures.placement.hysteresis import HysteresisBand
 
 HYSTERESIS_FILE = "hysteresis.csv"
 
@@ -26,7 +29,7 @@ def hysteresis_csv(band: HysteresisBand) -> str:
     writer.writerow(["twist_deg", "largest_band_mm"] + [f"band_station_{k}_mm" for k in range(stations)])
     widths, per_station = without_round_off(band.width), without_round_off(band.band)
     for twist, width, row in zip(without_round_off(band.twists_deg), widths, per_station):
-        writer.writerow([_cell(twist), _cell(width)] + [_cell(value) for value in row])
+        writer.writerow([cell(twist), cell(width)] + [cell(value) for value in row])
     return stream.getvalue()
 
 

@@ -328,6 +328,7 @@ class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True)
 
 
+MAX_NESTING = 16  # levels of tables and arrays within each other a file may hold (the validation recurses per level)
 SPRING_FORCE_N = 1e7  # largest force of a stiffener table, N
 
 
@@ -1110,8 +1111,26 @@ def read_toml(path: Path, error: type[ValueError]) -> dict:
             raise error(f"{path}: not valid TOML: {exc}") from None
         except UnicodeDecodeError:
             raise error(f"{path}: not UTF-8 text: save the file as UTF-8") from None
+        except RecursionError:  # the parser recurses once per level of arrays or inline tables within each other
+            data = None
+    if data is None or _nesting(data) > MAX_NESTING:
+        raise error(f"{path}: arrays or tables nested more than {MAX_NESTING} levels deep (a hoseline file nests a few: "
+                    "a table of points in an array of tables): not a hoseline file, or a damaged one")
     data.setdefault("name", path.stem)
     return data
+
+
+def _nesting(data: dict) -> int:
+    """How many levels of tables and arrays `data` holds within each other (a flat table: 1), counted without
+    recursion."""
+    deepest, pending = 0, [(data, 1)]
+    while pending:
+        value, level = pending.pop()
+        deepest = max(deepest, level)
+        if level <= MAX_NESTING:  # deeper is refused whatever lies below
+            items = value.values() if isinstance(value, dict) else value
+            pending.extend((item, level + 1) for item in items if isinstance(item, (dict, list)))
+    return deepest
 
 
 def problem_to_dict(problem: Problem, poisson_ratio: float | None = None) -> dict:

@@ -27,7 +27,7 @@ import numpy as np
 from hoseline.io.atomic import write_bytes, write_text
 from hoseline.io.problem_file import _toml_value, problem_to_dict, problem_to_toml
 from hoseline.io.results import _json, _plain
-from hoseline.io.sweep_results import _cell
+from hoseline.io.csv_numbers import cell
 from hoseline.procedures.variation.statistics import PERCENTILES
 from hoseline.procedures.variation.study import Study, StudyOutcome
 
@@ -49,14 +49,23 @@ def fingerprint(study_text: str, base_text: str, study: Study) -> str:
     return digest.hexdigest()
 
 
+def _fingerprint_of(manifest: Path) -> str | None:
+    """The study fingerprint a partial stage's manifest.json names; None when it names none or cannot be read."""
+    try:
+        data = json.loads(manifest.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):  # ValueError: not JSON, or not UTF-8
+        return None
+    return data.get("fingerprint") if isinstance(data, dict) else None
+
+
 class PartialStore:
     """The finished batches of one stage of a study, kept under OUT/.partial/STAGE (see the module doc)."""
 
     def __init__(self, out_dir: str | Path, stage: str, study_fingerprint: str) -> None:
         self.folder = Path(out_dir) / PARTIAL / stage
         manifest = self.folder / "manifest.json"
-        if manifest.exists() and json.loads(manifest.read_text(encoding="utf-8")).get("fingerprint") != study_fingerprint:
-            shutil.rmtree(self.folder)  # batches of another study (or of the same one changed)
+        if manifest.exists() and _fingerprint_of(manifest) != study_fingerprint:
+            shutil.rmtree(self.folder)  # batches of another study (or of the same one changed, or a damaged manifest)
         self.folder.mkdir(parents=True, exist_ok=True)
         write_text(manifest, json.dumps({"fingerprint": study_fingerprint}))
 
@@ -87,7 +96,7 @@ def _table(columns: dict[str, list | np.ndarray]) -> str:
     writer.writerow(columns)
     length = len(next(iter(columns.values()))) if columns else 0
     for k in range(length):
-        writer.writerow(_cell(values[k]) for values in columns.values())
+        writer.writerow(cell(values[k]) for values in columns.values())
     return stream.getvalue()
 
 

@@ -1,10 +1,8 @@
 """Data files of a sweep: poses.csv (one row per pose), shapes.csv (every station of every pose), sweep.json,
 envelope.stl (the swept envelope) and obstacle_<name>.stl for each obstacle made in code rather than read from a file.
 
-Numbers are written with 8 significant digits; a number smaller than ROUND_OFF times the
-largest magnitude of its quantity (round-off such as 3e-45 where the exact value is 0) is
-written as 0.  The report (HTML, PNG) is written by report/sweep_report.py, which puts
-these files beside it.
+Numbers are written as io/csv_numbers.py says (8 significant digits, round-off as 0).  The report
+(HTML, PNG) is written by report/sweep_report.py, which puts these files beside it.
 """
 
 from __future__ import annotations
@@ -17,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from hoseline.io.atomic import write_text
+from hoseline.io.csv_numbers import cell, without_round_off
 from hoseline.io.obstacle_mesh import write_stl
 from hoseline.io.problem_file import problem_to_dict
 from hoseline.io.results import _json, _plain
@@ -24,7 +23,6 @@ from hoseline.model.sweep import SweepProblem
 from hoseline.procedures.sweep.envelope import Envelope
 from hoseline.procedures.sweep.result import SweepResult
 
-ROUND_OFF = 1e-12  # relative to the quantity's largest magnitude: below it, a number is written as 0
 ENVELOPE_FILE = "envelope.stl"
 
 
@@ -67,7 +65,7 @@ def poses_csv(result: SweepResult) -> str:
     writer = csv.writer(stream, lineterminator="\n")
     writer.writerow(columns)
     for k in range(result.pose_count):
-        writer.writerow(_cell(values[k]) for values in columns.values())
+        writer.writerow(cell(values[k]) for values in columns.values())
     return stream.getvalue()
 
 
@@ -87,7 +85,7 @@ def shapes_csv(result: SweepResult) -> str:
     rows = ["pose,s,x,y,z"]
     for k, line in enumerate(centerlines):
         s_pose = s if s.ndim == 1 else s[k]
-        rows.extend(f"{k},{_cell(length)},{_cell(x)},{_cell(y)},{_cell(z)}" for length, (x, y, z) in zip(s_pose, line))
+        rows.extend(f"{k},{cell(length)},{cell(x)},{cell(y)},{cell(z)}" for length, (x, y, z) in zip(s_pose, line))
     return "\n".join(rows) + "\n"
 
 
@@ -157,19 +155,5 @@ def obstacle_files(sweep: SweepProblem) -> dict[int, str]:
     return names
 
 
-def without_round_off(values) -> np.ndarray:
-    """`values` (an array of one quantity, any shape), entries below ROUND_OFF times its largest magnitude set to 0."""
-    values = np.asarray(values, dtype=float)
-    finite = np.abs(values[np.isfinite(values)])
-    scale = finite.max() if finite.size else 0.0
-    return np.where(np.abs(values) < ROUND_OFF * scale, 0.0, values) + 0.0  # + 0.0: no -0 either
-
-
 def _stage(result: SweepResult, k: int) -> str:
     return next(s.name for s in result.sweep.stages if s.first <= k < s.first + s.count)
-
-
-def _cell(value) -> str:
-    if isinstance(value, (float, np.floating)):
-        return "" if not np.isfinite(value) else f"{value:.8g}"
-    return str(value)

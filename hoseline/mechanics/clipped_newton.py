@@ -24,8 +24,8 @@ import numpy as np
 from hoseline.mechanics.banded import banded_matvec, ldlt_banded, ldlt_solve
 from hoseline.mechanics.bordered import kkt_solve_bordered, tangent_space_inertia
 from hoseline.mechanics.clipped import clip_moments, clipped_system, stretch_terms, unknown_layout
-from hoseline.mechanics.newton import NewtonReport, RodProperties, System, _residual, _roll_frame
 from hoseline.mechanics.rod import Clamps, RodState
+from hoseline.mechanics.rod_system import NewtonReport, RodProperties, System, relative_residual, roll_frame
 from hoseline.mechanics.rotations import rotate_frames
 
 
@@ -38,7 +38,7 @@ def clip_arrays(clamps: Clamps, state: RodState):
         rolls = clip_rolls(clamps, state)
         frames = base_frames.copy()
         for j in np.flatnonzero(roll_free):
-            frames[j] = _roll_frame(base_frames[j], float(rolls[j]))
+            frames[j] = roll_frame(base_frames[j], float(rolls[j]))
     return nodes, points, frames, framed, roll_free
 
 
@@ -147,7 +147,7 @@ def station_positions(props: RodProperties, clamps: Clamps, state: RodState) -> 
 
 
 def _end_frame(clamps: Clamps, state: RodState) -> np.ndarray:
-    return _roll_frame(clamps.end_frame, state.roll) if clamps.roll_free else clamps.end_frame
+    return roll_frame(clamps.end_frame, state.roll) if clamps.roll_free else clamps.end_frame
 
 
 def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
@@ -166,7 +166,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
     )
     force_scale = np.array([float(np.linalg.norm(forces)), 0.0, 0.0])
     if rates.shape[1] == 0:
-        residual = _residual(grad_max, gap, force_scale, clamps.line_weight, props.largest_stiffness, props.length)
+        residual = relative_residual(grad_max, gap, force_scale, clamps.line_weight, props.largest_stiffness, props.length)
         return System(energy, grad, band, jac_t, constraint, residual, True)
     if props.springs is not None:
         raise ValueError("a sliding clip with stiffener springs is not supported: the springs' length law is not modelled")
@@ -176,7 +176,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
     )
     # an arc-length gradient (N) times a segment length is a moment like the others
     grad_max = max(grad_max, float(np.max(np.abs(stretch_grad))) * props.segment_length)
-    residual = _residual(grad_max, gap, force_scale, clamps.line_weight, props.largest_stiffness, props.length)
+    residual = relative_residual(grad_max, gap, force_scale, clamps.line_weight, props.largest_stiffness, props.length)
     if np.min(lengths) < SHORTEST_STRETCHED * props.segment_length:
         residual = np.inf  # a sliding clip ran onto its neighbour: the step is refused (halved)
     return SlidingSystem(energy, grad, band, jac_t, constraint, residual, True, stretch_grad, mixed, stretch_hessian,

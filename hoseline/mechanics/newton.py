@@ -19,7 +19,6 @@ moment scale, and the end-position error divided by the length, both below `tole
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -27,68 +26,9 @@ from numba import njit
 from hoseline.mechanics.banded import banded_matvec, kkt_solve, ldlt_banded, ldlt_solve
 from hoseline.mechanics.energy import BANDWIDTH, assemble
 from hoseline.mechanics.rod import Clamps, RodState, centerline, constraint_jacobian_t, segment_loads
-from hoseline.mechanics.rotations import rotate_frames, rotation_matrix
-
-
-@dataclass(frozen=True)
-class RodProperties:
-    """Internal-unit properties of the discrete rod: stiffness (EI1, EI2, GJ) N*mm^2, segment length h mm, count N.
-
-    springs: the joint model.  None (default): the elastic joints of energy.py alone; else
-    the stiffener springs added at every joint, as packed by mechanics.stiffeners.spring_set.
-    rest: the preset.  None (default): the hose is straight and untwisted when unloaded; else
-    (N+1, 3, 3) stress-free relative rotations of the joints (model/preset.py, energy.py).
-    braid: the braid coupling.  None (default): none; else the data of mechanics.braid.braid_coefficients,
-    added to every joint.
-    """
-
-    stiffness: np.ndarray
-    segment_length: float
-    segments: int
-    springs: tuple | None = None
-    rest: np.ndarray | None = None
-    braid: np.ndarray | None = None
-
-    @property
-    def length(self) -> float:
-        return self.segment_length * self.segments
-
-    @property
-    def largest_stiffness(self) -> float:
-        return float(max(self.stiffness))
-
-
-@dataclass
-class NewtonReport:
-    """Outcome of one equilibrium solve."""
-
-    converged: bool
-    iterations: int
-    residual: float
-    unstable_directions: int
-    message: str = ""
-
-
-@dataclass
-class System:
-    """Energy, derivatives and constraint of the rod at one state (internal units)."""
-
-    energy: float  # elastic + gravity, N*mm
-    grad: np.ndarray  # gradient of the Lagrangian, N*mm per rad
-    band: np.ndarray  # banded Hessian of the Lagrangian
-    jac_t: np.ndarray  # (n, 3)
-    constraint: np.ndarray  # x_N - end point, mm (zero for a free tip)
-    residual: float
-    constrained: bool  # False for a free tip
-
-
-def end_frame_of(clamps: Clamps, state: RodState) -> np.ndarray:
-    """The end fitting frame including the free roll accumulated in the state (identity for a free tip)."""
-    if not clamps.end_clamped:
-        return np.eye(3)
-    if not clamps.roll_free:
-        return clamps.end_frame
-    return _roll_frame(clamps.end_frame, state.roll)
+from hoseline.mechanics.rotations import rotate_frames
+from hoseline.mechanics.rod_system import (NewtonReport, RodProperties, System, end_frame_of, relative_residual,
+                                           roll_frame)
 
 
 @njit(cache=True)
@@ -155,7 +95,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
         props.braid,
     )
     force = state.end_force if clamps.end_clamped else clamps.end_load
-    residual = _residual(grad_max, gap, force, clamps.line_weight, props.largest_stiffness, props.length)
+    residual = relative_residual(grad_max, gap, force, clamps.line_weight, props.largest_stiffness, props.length)
     return System(energy, grad, band, jac_t, constraint, residual, clamps.end_clamped)
 
 
@@ -252,36 +192,16 @@ def _refuse_preset_with_clips(props: RodProperties) -> None:
 
 
 @njit(cache=True)
-def _roll_frame(frame, roll):
-    """The frame turned by `roll` (rad) about its own d3."""
-    if roll == 0.0:
-        return frame
-    turn = rotation_matrix(roll * frame[2])
-    out = np.empty((3, 3))
-    for k in range(3):  # every director d -> turn d, written out (a matrix product compiles Numba's BLAS glue)
-        for x in range(3):
-            out[k, x] = turn[x, 0] * frame[k, 0] + turn[x, 1] * frame[k, 1] + turn[x, 2] * frame[k, 2]
-    return out
-
-
-@njit(cache=True)
-def _residual(grad_max, gap, force, line_weight, largest_stiffness, length):
-    weight = math.sqrt(line_weight[0] ** 2 + line_weight[1] ** 2 + line_weight[2] ** 2)
-    scale = largest_stiffness / length + (math.sqrt(force[0] ** 2 + force[1] ** 2 + force[2] ** 2) + weight * length) * length
-    return max(grad_max / scale, gap / length)
-
-
-@njit(cache=True)
 def _state_system(
     frames, force, roll, start_point, start_frame, end_point, end_frame, stiffness, h, line_weight,
     roll_free, end_clamped, largest_stiffness, springs, rest, braid,
 ):
     """_system_kernel at a state with the end frame turned by `roll`, plus its relative residual."""
     energy, grad, band, jac_t, constraint, grad_max, gap = _system_kernel(
-        frames, start_point, start_frame, end_point, _roll_frame(end_frame, roll), stiffness, h, force, line_weight,
+        frames, start_point, start_frame, end_point, roll_frame(end_frame, roll), stiffness, h, force, line_weight,
         roll_free, end_clamped, springs, rest, braid,
     )
-    residual = _residual(grad_max, gap, force, line_weight, largest_stiffness, h * frames.shape[0])
+    residual = relative_residual(grad_max, gap, force, line_weight, largest_stiffness, h * frames.shape[0])
     return energy, grad, band, jac_t, constraint, residual
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-import scipy.linalg
 from numba import njit
 
 from hoseline.mechanics.banded import band_to_dense, banded_matvec, kkt_solve, ldlt_banded, ldlt_solve
@@ -20,6 +19,8 @@ from hoseline.mechanics.bordered import kkt_solve_bordered
 
 
 def _dense_pairs(band: np.ndarray, jac_t: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    import scipy.linalg  # here, not at the top: only small or far-unstable systems need it (0.1 s to load)
+
     basis = scipy.linalg.null_space(jac_t.T)
     reduced = basis.T @ band_to_dense(band) @ basis
     values, vectors = scipy.linalg.eigh(reduced, subset_by_index=[0, count - 1])

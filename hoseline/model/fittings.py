@@ -37,7 +37,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hoseline.model.hose import Hose
 from hoseline.model.mounts import Mount, unit_vector
 
 MAX_BEND_DEG = 180.0  # an elbow turns the hose by less than a U-turn: its two legs would otherwise be parallel
@@ -200,27 +199,3 @@ class EndFittings:
         """[(which end, port, fitting)] for the ends that have a fitting."""
         return [(name, port, fitting) for name, port, fitting in
                 (("start", self.start_port, self.start), ("end", self.end_port, self.end)) if fitting is not None]
-
-
-def fitted_problem(hose: Hose, start_port: Mount, end_port: Mount, start: Fitting | None, end: Fitting | None, **problem_fields):
-    """The Problem of the flexible hose between the fitting outlets, carrying the fittings for reports and exports.
-
-    hose: the hose; its length is the free length (mm) between the fittings.
-    start_port, end_port: the ports as the user gives them (mm; directions from the port into the hose).
-    start, end: the fittings (None: crimped at the port).
-    problem_fields: the other Problem fields (end_twist_deg: degrees about the end outlet's direction, gravity, name, clips).
-    Raises ValueError naming the length to change when the free hose cannot span the outlets.
-    """
-    from hoseline.model.problem import Problem, reaches  # problem.py imports this module for EndFittings
-
-    fittings = EndFittings(start_port, end_port, start, end)
-    first, last = fittings.outlets()
-    gap = float(np.linalg.norm(last.point - first.point))
-    if not reaches(hose.length, gap):
-        allowance = fittings.length_allowance
-        raise ValueError(
-            f"hose: the free length {hose.length:g} mm (overall length {fittings.overall_length(hose.length):g} mm less "
-            f"{allowance:g} mm of fittings) is not longer than the {gap:g} mm between the fitting outlets: give an "
-            f"overall_length above {gap + allowance:g} mm (a length above {gap:g} mm), or shorter fittings"
-        )
-    return Problem(hose=hose, start=first, end=last, fittings=fittings, **problem_fields)

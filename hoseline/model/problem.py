@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hoseline.model.clips import Clip, clip_node, off_station_message
-from hoseline.model.fittings import EndFittings
+from hoseline.model.fittings import EndFittings, Fitting
 from hoseline.model.hose import Hose
 from hoseline.model.mounts import Mount, mount_distance, unit_vector
 from hoseline.model.obstacles import Obstacle
@@ -120,7 +120,7 @@ class Problem:
             turned = float(np.linalg.norm(mount.direction - outlet.direction))
             if off > 1e-9 or turned > 1e-9:
                 raise ValueError(f"{name}: the mount is not the outlet of its fitting (off by {off * self.hose.length:g} mm, "
-                                 f"{turned:g} in direction): build the problem with model.fittings.fitted_problem")
+                                 f"{turned:g} in direction): build the problem with model.problem.fitted_problem")
 
     def _check_clips(self) -> None:
         """Each clip strictly inside the hose, on a station, after the previous one, and reachable; none on a braided hose."""
@@ -174,3 +174,25 @@ def _side(side, obstacle: Obstacle) -> np.ndarray:
         raise ValueError(f"{label}: a plane keeps the hose on the side its normal points to; leave hose_side out "
                          "(turn the normal to choose the side)")
     return unit_vector(side, label)
+
+
+def fitted_problem(hose: Hose, start_port: Mount, end_port: Mount, start: Fitting | None, end: Fitting | None, **problem_fields):
+    """The Problem of the flexible hose between the fitting outlets, carrying the fittings for reports and exports.
+
+    hose: the hose; its length is the free length (mm) between the fittings.
+    start_port, end_port: the ports as the user gives them (mm; directions from the port into the hose).
+    start, end: the fittings (None: crimped at the port).
+    problem_fields: the other Problem fields (end_twist_deg: degrees about the end outlet's direction, gravity, name, clips).
+    Raises ValueError naming the length to change when the free hose cannot span the outlets.
+    """
+    fittings = EndFittings(start_port, end_port, start, end)
+    first, last = fittings.outlets()
+    gap = float(np.linalg.norm(last.point - first.point))
+    if not reaches(hose.length, gap):
+        allowance = fittings.length_allowance
+        raise ValueError(
+            f"hose: the free length {hose.length:g} mm (overall length {fittings.overall_length(hose.length):g} mm less "
+            f"{allowance:g} mm of fittings) is not longer than the {gap:g} mm between the fitting outlets: give an "
+            f"overall_length above {gap + allowance:g} mm (a length above {gap:g} mm), or shorter fittings"
+        )
+    return Problem(hose=hose, start=first, end=last, fittings=fittings, **problem_fields)

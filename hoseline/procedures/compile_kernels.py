@@ -7,7 +7,9 @@ placement uses; with clearance=True it also asks a clearance query (sweeps), wit
 stiffeners=True it places the hose with the thesis' stiffener springs (their kernels take other
 argument types), with clips=True a hose held by a fixed and a sliding clip, with contact=True a
 heavy hose that snaps down onto a floor (the contact Newton, its downhill mode and step filter,
-with every kind of obstacle and self-contact).  `hoseline compile` compiles every part; the
+with every kind of obstacle and self-contact), with preset=True the hose with a set (model/preset.py: its
+rest rotations are another argument type), with braid=True the hose with a braid (mechanics/braid.py).
+A hose with two of springs, a set and a braid at once compiles its combination on its first run.  `hoseline compile` compiles every part; the
 Makefile runs it when it installs hoseline, as an ahead-of-time build would, so that the first
 run after `make` compiles nothing.
 
@@ -36,20 +38,14 @@ from dataclasses import replace
 import numpy as np
 
 from hoseline.compilation import PACKAGE, compiling, is_compiled, persistent, version_folder
-from hoseline.mechanics.contact_motion import moved_model
-from hoseline.mechanics.energy import BANDWIDTH
-from hoseline.mechanics.newton import RodProperties, solve_equilibrium
-from hoseline.mechanics.rod import Clamps, RodState, centerline
-from hoseline.mechanics.rotations import rotate_frames
-from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model import Hose, Mount, Problem
 from hoseline.model.clips import Clip
-from hoseline.model.motion import Pose
+from hoseline.model.braid import Braid
 from hoseline.model.obstacles import Box, Cylinder, Mesh, Plane, Sphere
-from hoseline.model.stiffeners import thesis_preset
-from hoseline.procedures.contact.placement import problem_contact_model
-from hoseline.procedures.geometry.clearance import TriangleIndex
-from hoseline.procedures.placement.sequence import solve
+from hoseline.model.preset import Preset
+
+# The solver's modules are imported by the functions that compile them: a run that finds its parts compiled
+# (kernels_compiled) loads none of them here, only those it uses.
 
 # The thesis brake hose, coarse: 16 segments give 48 unknowns, above the 40 from which the
 # stability check runs its compiled iteration instead of a dense eigen-decomposition.
@@ -59,6 +55,10 @@ SMALL_PLACEMENT = Problem(
     Mount([-173.064, -7.0, -11.25], [1.0, 0.0, 0.0]),
     180.0,
 )
+
+
+SMALL_PRESET = Preset(curvature=1.0 / 250.0, angle_deg=-40.0)  # a set of 250 mm radius
+SMALL_BRAID = Braid(angle_deg=38.0, strands=12, strand_axial_stiffness=1500.0, slack_strain=0.005)  # strands engage
 
 
 def _grid_sheet(cells: int, corner: list[float], size: float) -> Mesh:
@@ -93,10 +93,18 @@ CONTACT_PLACEMENT = Problem(
 
 
 def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bool = False,
-                    contact: bool = False) -> None:
+                    contact: bool = False, preset: bool = False, braid: bool = False) -> None:
     """Compile, or load from the cache, every kernel of a placement; with `clearance` those of a
     clearance query, with `stiffeners` those of a placement with stiffener springs, with `clips`
-    those of a placement with clips, with `contact` those of a placement with contact."""
+    those of a placement with clips, with `contact` those of a placement with contact, with `preset`
+    those of a hose with a set, with `braid` those of a braided hose."""
+    from hoseline.mechanics.contact_motion import moved_model
+    from hoseline.model.motion import Pose
+    from hoseline.model.stiffeners import thesis_preset
+    from hoseline.procedures.contact.placement import problem_contact_model
+    from hoseline.procedures.geometry.clearance import TriangleIndex
+    from hoseline.procedures.placement.sequence import solve
+
     with compiling("placement"):
         if not is_compiled("placement"):
             with _second_process("stability_kernels"):
@@ -122,10 +130,18 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
             small.pairs(np.linspace([0.0, 0.0, 100.0], [150.0, 0.0, 100.0], 17), small.activation)
             model = problem_contact_model(CONTACT_PLACEMENT)  # a sweep's obstacles moved with their bodies
             moved_model(model, [Pose(position=np.array([1.0, 0.0, 0.0]))] * len(model.names))
+    if preset:
+        with compiling("preset"):
+            solve(replace(SMALL_PLACEMENT, hose=replace(SMALL_PLACEMENT.hose, preset=SMALL_PRESET)))
+    if braid:
+        with compiling("braid"):
+            solve(replace(SMALL_PLACEMENT, hose=replace(SMALL_PLACEMENT.hose, braid=SMALL_BRAID)))
 
 
 def small_clips() -> tuple[Clip, Clip]:
     """A fixed clip a third along SMALL_PLACEMENT's shape and a sliding one two thirds along (where they sit)."""
+    from hoseline.procedures.placement.sequence import solve
+
     placed = solve(SMALL_PLACEMENT, estimate_error=False)
     h = SMALL_PLACEMENT.hose.segment_length
     held = []
@@ -136,15 +152,20 @@ def small_clips() -> tuple[Clip, Clip]:
 
 
 def kernels_compiled(clearance: bool = False, stiffeners: bool = False, clips: bool = False,
-                     contact: bool = False) -> bool:
-    """Whether compile_kernels(clearance, stiffeners, clips, contact) has already filled the cache for this
-    version and CPU."""
-    wanted = {"placement": True, "clearance": clearance, "stiffeners": stiffeners, "clips": clips, "contact": contact}
+                     contact: bool = False, preset: bool = False, braid: bool = False) -> bool:
+    """Whether compile_kernels(clearance, stiffeners, clips, contact, preset, braid) has already filled the cache
+    for this version and CPU."""
+    wanted = {"placement": True, "clearance": clearance, "stiffeners": stiffeners, "clips": clips, "contact": contact,
+              "preset": preset, "braid": braid}
     return all(is_compiled(part) for part, asked in wanted.items() if asked)
 
 
 def newton_kernels() -> None:
     """Compile the Newton iteration, both kinds (solve_equilibrium), on a small bent hose."""
+    from hoseline.mechanics.newton import RodProperties, solve_equilibrium
+    from hoseline.mechanics.rod import Clamps, RodState, centerline
+    from hoseline.mechanics.rotations import rotate_frames
+
     segments = 16
     bend = np.outer(np.linspace(0.0, 1.0, segments), [0.2, 0.0, 0.0])  # rad about x, growing along the hose
     frames = rotate_frames(np.tile(np.eye(3), (segments, 1, 1)), bend)
@@ -158,6 +179,9 @@ def newton_kernels() -> None:
 def stability_kernels() -> None:
     """Compile the stability check (smallest_eigenpairs) on a made-up Hessian of 48 unknowns, enough
     for its compiled iteration."""
+    from hoseline.mechanics.energy import BANDWIDTH
+    from hoseline.mechanics.stability import smallest_eigenpairs
+
     unknowns = 48
     band = np.zeros((unknowns, BANDWIDTH + 1))
     band[:, 0] = np.arange(1.0, unknowns + 1.0)

@@ -124,6 +124,8 @@ def parse_message(text: str | bytes) -> Target | Command:
         data = json.loads(text)
     except ValueError as exc:
         raise MessageError(f"not JSON: {exc}") from None
+    except RecursionError:  # the parser recurses once per level of arrays or objects within each other
+        raise MessageError("JSON nested too deeply to read (hundreds of levels)") from None
     kind = data.get("type") if isinstance(data, dict) else None
     model = {"set": Target, "place": Command, "segments": Command, "clearance": Command, "undo": Command,
              "redo": Command}.get(kind)

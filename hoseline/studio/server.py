@@ -52,6 +52,7 @@ from hoseline.studio.inbox import Inbox
 from hoseline.studio.messages import Command, MessageError, parse_message
 from hoseline.studio.session import Session, StudioError
 from hoseline.studio.uploads import MAX_FILES, SIZE_LIMITS, UploadError, checked_name, mount_labels, open_upload
+from hoseline.studio.view import session_message, state_message
 
 STATIC = Path(__file__).parent / "static"
 IDLE_SECONDS = 0.3
@@ -84,13 +85,13 @@ class Studio:
         started: time.perf_counter() when the solver took up the message answered; the state then
         says how long the solver thread spent on it (seconds, without the final JSON encoding).
         """
-        message = self.session.message()
+        message = state_message(self.session)
         message["seq"] = seq
         message["server_seconds"] = None if started is None else time.perf_counter() - started
         return json.dumps(message, allow_nan=False)
 
     def session_text(self) -> str:
-        return json.dumps(self.session.session_message(), allow_nan=False)
+        return json.dumps(session_message(self.session), allow_nan=False)
 
     async def broadcast(self, text: str, skip: WebSocket | None = None) -> None:
         """Send to every open page but `skip`."""

@@ -39,10 +39,10 @@ from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.tracking import Fittings, Step, Tracker, twisted
+from hoseline.studio.comparison import placement_comparison
 from hoseline.studio.messages import HoseTarget, Target
 from hoseline.studio.ports import PortAnchor, piece_outline
 from hoseline.studio.saving import saved_twist
-from hoseline.studio.view import placement_comparison, session_message, state_message
 
 
 MAX_TWIST_STEP = 90.0  # degrees of twist per step of continuation (a frame cannot tell 270 from -90)
@@ -294,14 +294,6 @@ class Session:
         problem = replace(design, hose=self.problem.hose, end_twist_deg=self.problem.end_twist_deg,
                           gravity=self.problem.gravity)
         return replace(self.sweep, problem=problem)
-
-    def message(self) -> dict:
-        """What the page draws: the shape, the fittings, colour-map data and readouts (view.state_message)."""
-        return state_message(self)
-
-    def session_message(self) -> dict:
-        """What changes only when a file is opened (view.session_message)."""
-        return session_message(self)
 
     # --- helpers ---
 

@@ -4,8 +4,9 @@ The discrete rod converges with order 2 in the segment length h (docs/model.md: 
 orders 1.98-2.01), so the station error behaves like C h^2.  With the shape x_N of N segments
 and x_M of M = N/2 segments at the same clamps, Richardson extrapolation estimates the error
 of x_N as |x_M - x_N| / ((N/M)^2 - 1).  The coarse shape is solved by Newton from the fine
-one (the same branch, a few iterations), and compared at the fine stations through a cubic
-spline of its stations (interpolation error O(h^4), far below the estimate).
+one (the same branch, a few iterations), and compared at the fine stations through the cubic
+through the four coarse stations around each (interpolation error O(h^4), far below the
+estimate; local, so that a solve loads no spline library).
 
 With contact the order is one (docs/model.md, Contact: a touch-down or lift-off point falls between
 stations, and the reaction concentrated there is carried by the stations next to it), and the barrier
@@ -21,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from hoseline.mechanics.clipped_newton import station_positions
 from hoseline.mechanics.newton import RodProperties, node_positions, solve_equilibrium
@@ -43,6 +43,22 @@ def coarse_guess(fine: RodProperties, coarse: RodProperties, state: RodState) ->
     midpoints = (np.arange(coarse.segments) + 0.5) * coarse.segment_length
     nearest = np.minimum((midpoints / fine.segment_length).astype(int), fine.segments - 1)
     return RodState(state.frames[nearest].copy(), state.end_force.copy(), state.roll)
+
+
+def local_cubic(s_known: np.ndarray, points: np.ndarray, s_wanted: np.ndarray) -> np.ndarray:
+    """`points` (n, 3) at the increasing arc lengths `s_known` (n,) interpolated at `s_wanted` (m,), mm: at each, the
+    cubic through the four known points around it (Lagrange; the first or last four near the ends, all of them when
+    fewer); the error is O(h^4) on a smooth curve of spacing h."""
+    order = min(4, len(s_known))
+    first = np.clip(np.searchsorted(s_known, s_wanted) - order // 2, 0, len(s_known) - order)
+    nodes = first[:, None] + np.arange(order)  # (m, order) the known points each is interpolated from
+    knots = s_known[nodes]
+    weights = np.ones(nodes.shape)
+    for j in range(order):
+        for k in range(order):
+            if k != j:
+                weights[:, j] *= (s_wanted - knots[:, k]) / (knots[:, j] - knots[:, k])
+    return np.einsum("mj,mjd->md", weights, points[nodes])
 
 
 def richardson_error(fine: RodProperties, coarse: RodProperties, clamps: Clamps, state: RodState,
@@ -70,7 +86,7 @@ def richardson_error(fine: RodProperties, coarse: RodProperties, clamps: Clamps,
         coarse_nodes = node_positions(coarse, clamps, coarse_state)
         s_fine = fine.segment_length * np.arange(fine.segments + 1)
         s_coarse = coarse.segment_length * np.arange(coarse.segments + 1)
-    difference = CubicSpline(s_coarse, coarse_nodes, axis=0)(s_fine) - fine_nodes
+    difference = local_cubic(s_coarse, coarse_nodes, s_fine) - fine_nodes
     ratio = (fine.segments / coarse.segments) ** CONVERGENCE_ORDER
     return float(np.max(np.linalg.norm(difference, axis=1))) / (ratio - 1.0)
 
@@ -127,7 +143,7 @@ def contact_errors(fine: ContactSnapshot, coarse: ContactSnapshot, narrowed: Con
         return (float(np.linalg.norm(coarse_value - fine_value)) / segments
                 + barrier * float(np.linalg.norm(narrowed_value - fine_value)))
 
-    coarse_at_fine = CubicSpline(coarse.s, coarse.centerline, axis=0)(fine.s)
+    coarse_at_fine = local_cubic(coarse.s, coarse.centerline, fine.s)
     shape = float(np.max(np.linalg.norm(coarse_at_fine - fine.centerline, axis=1))) / segments
     standoff = barrier * float(np.max(np.linalg.norm(narrowed.centerline - fine.centerline, axis=1)))
     reactions = max(error(fine.reactions[k], coarse.reactions[k], narrowed.reactions[k]) for k in range(2))

@@ -39,7 +39,8 @@ from hoseline.mechanics.newton import RodProperties, node_positions, solve_equil
 from hoseline.mechanics.rod import RodState
 from hoseline.model.preset import rest_rotations
 from hoseline.model.problem import Problem
-from hoseline.procedures.placement.sequence import PlacementPath, rod_properties, solve
+from hoseline.procedures.placement.path import PlacementPath
+from hoseline.procedures.placement.sequence import rod_properties, solve
 from hoseline.procedures.placement.twist_path import follow_twist
 from hoseline.procedures.scans.deviation import closest_on_polyline
 

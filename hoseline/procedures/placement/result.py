@@ -58,7 +58,7 @@ class ClipReaction:
     (rows d1, d2, d3 in world components; d3 along the hose, the roll found included), None for a
     ball clip.  locked_roll_deg: a fixed clip's roll at which the placement locked it, degrees
     (right-handed about the clip direction, from the clip frame the place phase carries the start
-    fitting's frame to: see placement/sequence.PlacementPath); None for the other kinds."""
+    fitting's frame to: see placement/path.PlacementPath); None for the other kinds."""
 
     kind: str
     name: str

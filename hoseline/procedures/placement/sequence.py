@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,9 +38,8 @@ from hoseline.mechanics.braid import braid_coefficients
 from hoseline.mechanics.clipped_newton import clip_rolls
 from hoseline.mechanics.newton import RodProperties, end_frame_of, solve_equilibrium, total_energy
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
-from hoseline.mechanics.rotations import frame_from_tangent, perpendicular, rotate_frames, rotation_matrix, rotation_vector
+from hoseline.mechanics.rotations import perpendicular, rotate_frames, rotation_matrix, rotation_vector
 from hoseline.mechanics.stiffeners import spring_set
-from hoseline.model.clips import clip_node
 from hoseline.model.hose import MIN_SEGMENTS, Hose
 from hoseline.model.preset import preset_rest_rotations
 from hoseline.model.problem import Problem
@@ -51,18 +51,18 @@ from hoseline.procedures.placement.continuation import (
     follow,
     relax_to_stable,
 )
+from hoseline.procedures.placement.path import PlacementPath, tangent_turn
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.stiffening import phase_in_springs
 from hoseline.procedures.placement.stations import build_result
-from hoseline.procedures.placement.accuracy import (BARRIER_NARROWING, coarse_guess, coarse_segments, contact_errors,
-                                                     richardson_error, snapshot)
-from hoseline.procedures.contact import placement as contact_placement
-from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
-from hoseline.procedures.contact.bring_in import BroughtIn, bring_in
-from hoseline.procedures.contact.cushion import follow_on_cushion
-from hoseline.mechanics.contact_motion import only
-from hoseline.mechanics.contact_newton import solve_with_contact
+from hoseline.procedures.placement.accuracy import coarse_guess, coarse_segments, richardson_error
 from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, other_way_round, symmetric_images
+
+if TYPE_CHECKING:
+    from hoseline.procedures.contact.bring_in import BroughtIn
+
+# The contact modules (procedures/contact/, mechanics/contact*.py, with SciPy's linear algebra and sparse graphs) are
+# imported where a placement with contact uses them, so that one without contact does not load them.
 
 __all__ = ["solve", "PlacementError", "rod_properties"]
 
@@ -98,120 +98,6 @@ def stiffener_springs(hose: Hose) -> tuple | None:
     return spring_set(full, half, stiffeners.table.deformation, stiffeners.table.force)
 
 
-def weight_vector(problem: Problem) -> np.ndarray:
-    """Weight per length of the hose as a vector, N/mm (kg/m times m/s^2 = N/m = 1e-3 N/mm)."""
-    return problem.hose.mass_per_length * problem.gravity * 1e-3
-
-
-def placement_rotation(problem: Problem) -> tuple[np.ndarray, float]:
-    """Axis (unit) and angle (rad) of the rotation that turns the start tangent into the end tangent.
-
-    The axis is the cross product of the tangents; for parallel or antiparallel tangents it
-    is normal to the plane of the start tangent and the mount-to-mount vector (so the
-    tangent turns towards the end mount), or any normal if that plane is not defined.
-    """
-    return tangent_turn(problem.start.direction, -problem.end.direction, problem.end.point - problem.start.point,
-                        problem.hose.length)
-
-
-def tangent_turn(t0: np.ndarray, t1: np.ndarray, chord: np.ndarray, length: float) -> tuple[np.ndarray, float]:
-    """Axis (unit) and angle (rad) turning the unit tangent t0 into t1: about t0 x t1, or for parallel
-    tangents about the normal of the plane of t0 and `chord` (mm; the hose of `length` mm turns
-    towards it), or any normal if that plane is not defined."""
-    cross = np.cross(t0, t1)
-    angle = math.atan2(float(np.linalg.norm(cross)), float(np.dot(t0, t1)))
-    if np.linalg.norm(cross) > 1e-9:
-        return cross / np.linalg.norm(cross), angle
-    toward = np.cross(t0, chord)
-    if np.linalg.norm(toward) > 1e-9 * length:
-        return toward / np.linalg.norm(toward), angle
-    return perpendicular(t0), angle
-
-
-class PlacementPath:
-    """The clamps along the placement of one problem: the place phase and the twisted end.
-
-    place(t): t in [0, 1] carries the end of the straight hose onto the end mount (roll free,
-    weight ramped in).  twisted(locked_frame, twist_deg): the end fitting at the end mount,
-    turned by twist_deg degrees about end.direction from the locked frame (roll clamped).
-
-    Clips: in the place phase every clip's station travels along a straight line from where it
-    sits on the straight hose to the clip point, and a clip that holds the direction turns its
-    frame from the start frame into the clip direction (about their cross product), roll free.
-    After the place phase the roll of fixed clips is locked at the torque-free angle found
-    (locked_clips); rotating and sliding clips stay free to roll.  A sliding clip starts at the
-    station nearest its arc_length and the hose slides through it all along the path (its arc
-    length is an unknown of every solve).
-    """
-
-    def __init__(self, problem: Problem):
-        self.problem = problem
-        self.start_frame = frame_from_tangent(problem.start.direction)
-        self.straight_end = problem.start.point + problem.hose.length * problem.start.direction
-        self.axis, self.angle = placement_rotation(problem)
-        self.weight = weight_vector(problem)
-        hose, start = problem.hose, problem.start
-        self.clip_nodes = [  # a sliding clip starts at the station nearest its arc_length
-            round(clip.arc_length / hose.segment_length) if clip.slides else clip_node(clip.arc_length, hose.length,
-                                                                                      int(hose.segments))
-            for clip in problem.clips
-        ]
-        self.clip_turns = [
-            tangent_turn(start.direction, clip.direction, clip.point - start.point, hose.length) if clip.holds_direction
-            else None
-            for clip in problem.clips
-        ]
-
-    def place(self, t: float) -> Clamps:
-        """Clamps at fraction t of the place phase."""
-        start, h = self.problem.start, self.problem.hose.segment_length
-        clips = tuple(
-            ClipHold(
-                node,
-                (1.0 - t) * (start.point + node * h * start.direction) + t * clip.point,
-                None if turn is None else self.start_frame @ rotation_matrix(turn[0] * (turn[1] * t)).T,
-                turn is not None,
-                clip.slides,
-            )
-            for clip, node, turn in zip(self.problem.clips, self.clip_nodes, self.clip_turns)
-        )
-        return Clamps(
-            start_point=start.point,
-            start_frame=self.start_frame,
-            end_point=(1.0 - t) * self.straight_end + t * self.problem.end.point,
-            end_frame=self.start_frame @ rotation_matrix(self.axis * (self.angle * t)).T,
-            roll_free=True,
-            line_weight=t * self.weight,
-            clips=clips,
-        )
-
-    def locked_clips(self, state: RodState) -> tuple[tuple[ClipHold, ...], np.ndarray]:
-        """The clips at the end of the place phase with the roll of fixed clips locked at the
-        torque-free angle of `state`, and the clip rolls (rad) that stay free (zero where locked)."""
-        placed = self.place(1.0)
-        rolls = clip_rolls(placed, state)
-        clips, free_rolls = [], np.zeros(len(rolls))
-        for j, (clip, hold) in enumerate(zip(self.problem.clips, placed.clips)):
-            if clip.kind == "fixed":
-                hold = replace(hold, frame=hold.frame @ rotation_matrix(rolls[j] * hold.frame[2]).T, roll_free=False)
-            elif hold.roll_free:
-                free_rolls[j] = rolls[j]
-            clips.append(hold)
-        return tuple(clips), free_rolls
-
-    def twisted(self, locked_frame: np.ndarray, twist_deg: float, clips: tuple[ClipHold, ...] = ()) -> Clamps:
-        """Clamps with the end fitting turned by twist_deg (degrees) from locked_frame; clips as locked."""
-        return Clamps(
-            start_point=self.problem.start.point,
-            start_frame=self.start_frame,
-            end_point=self.problem.end.point,
-            end_frame=locked_frame @ rotation_matrix(self.problem.end.direction * math.radians(twist_deg)).T,
-            roll_free=False,
-            line_weight=self.weight,
-            clips=clips,
-        )
-
-
 def solve(
     problem: Problem,
     *,
@@ -237,7 +123,9 @@ def solve(
 
     result = build_result(problem, props, final, state, lock_angle_deg, log, started, residual)
     if sequence.contact is not None:
-        result = contact_placement.with_contact(result, props, final, state, sequence.contact)
+        from hoseline.procedures.contact.placement import with_contact
+
+        result = with_contact(result, props, final, state, sequence.contact)
         result.obstacle_placement = sequence.brought_in or []
     others = fork_branches(props, final, state, log.forks, sequence.finish)
     if sequence.contact is None:
@@ -255,10 +143,14 @@ def solve(
         ]
         if sequence.contact is not None:
             result.alternatives = [
-                contact_placement.with_contact(other_result, props, other.clamps, other.state, sequence.contact)
+                with_contact(other_result, props, other.clamps, other.state, sequence.contact)
                 for other_result, other in zip(result.alternatives, others)
             ]
     if estimate_error and sequence.contact is not None:  # accuracy.contact_errors: half the segments, half d_hat
+        from hoseline.mechanics.contact_newton import solve_with_contact
+        from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
+        from hoseline.procedures.placement.accuracy import BARRIER_NARROWING, contact_errors, snapshot
+
         coarse_count = coarse_segments(props.segments, MIN_SEGMENTS)
         narrowed_model = sequence.contact.with_activation(BARRIER_NARROWING * sequence.contact.activation)
         narrowed, narrowed_report = solve_with_contact(props, final, state, narrowed_model,
@@ -275,7 +167,7 @@ def solve(
                                  f"placement with {coarse_count} segments, every clip on one of its stations, and the "
                                  "equilibrium with half the barrier's reach)")
         else:
-            narrowed_result = contact_placement.with_contact(
+            narrowed_result = with_contact(
                 build_result(problem, props, final, narrowed, lock_angle_deg, log, started, residual), props, final,
                 narrowed, narrowed_model)
             errors = contact_errors(snapshot(result), snapshot(coarse), snapshot(narrowed_result))
@@ -315,12 +207,16 @@ class _Sequence:
         self.twist_start: RodState | None = None  # the same with the roll locked: where the twist phase starts
         self.locked_clips: tuple[ClipHold, ...] = ()
         self.lock_angle_deg = 0.0
-        self.contact = contact_placement.problem_contact_model(problem) if problem.has_contact else None
         # the model the sequence follows: with "bring_in" self-contact only (None without it), the obstacles
         # brought in after the free placement (procedures/contact/bring_in.py); with "along_path" all of it
-        self.path_contact = self.contact
-        if self.contact is not None and problem.contact and problem.contact_placement == "bring_in":
-            self.path_contact = only(self.contact, [], self_contact=True) if problem.self_contact else None
+        self.contact = self.path_contact = None
+        if problem.has_contact:
+            from hoseline.mechanics.contact_motion import only
+            from hoseline.procedures.contact.placement import problem_contact_model
+
+            self.contact = self.path_contact = problem_contact_model(problem)
+            if problem.contact and problem.contact_placement == "bring_in":
+                self.path_contact = only(self.contact, [], self_contact=True) if problem.self_contact else None
         self.brought_in: list[BroughtIn] | None = None  # how each obstacle came in, on the main run
 
     def clear_buckle(self, state: RodState, fraction: float, log: ContinuationLog) -> RodState:
@@ -329,11 +225,13 @@ class _Sequence:
         `state` itself without contact."""
         if self.path_contact is None or not log.forks:
             return state
+        from hoseline.procedures.contact.placement import is_clear
+
         clamps = self.path.place(fraction)
         for other in log.forks[-1].others:
-            if contact_placement.is_clear(self.props, clamps, state, self.path_contact):
+            if is_clear(self.props, clamps, state, self.path_contact):
                 break
-            if contact_placement.is_clear(self.props, clamps, other, self.path_contact):
+            if is_clear(self.props, clamps, other, self.path_contact):
                 log.events.append("place: with contact, kept the buckled side that clears the obstacles (the one of "
                                   "lowest energy enters one)")
                 return other
@@ -345,6 +243,8 @@ class _Sequence:
         wider barrier, narrowed to the model's at the end of the phase, before any roll is locked)."""
         if self.path_contact is None:
             return follow(phase, path, props, state, log, start=fraction, control=control, progress=self.progress)
+        from hoseline.procedures.contact.cushion import follow_on_cushion
+
         return follow_on_cushion(phase, path, props, state, self.path_contact, start=fraction, control=control,
                                  log=log, progress=self.progress)
 
@@ -356,14 +256,14 @@ class _Sequence:
         if phase == "place":
             place_path = self.path.place
             if self.path_contact is not None:
-                contact_placement.check_clear("the straight hose the placement starts from", props, place_path(0.0),
-                                              RodState(np.repeat(self.path.start_frame[None], props.segments, axis=0),
-                                                       np.zeros(3), 0.0), self.path_contact)
-                contact_placement.check_held_paths(place_path, [clip.arc_length for clip in problem.clips],
-                                                   self.path_contact)
-                contact_placement.check_clear(f"the buckled hose at fraction {fraction:g} of the place phase (the first "
-                                              "step, taken without contact)", props, place_path(fraction), state,
-                                              self.path_contact)
+                from hoseline.procedures.contact.placement import check_clear, check_held_paths
+
+                check_clear("the straight hose the placement starts from", props, place_path(0.0),
+                            RodState(np.repeat(self.path.start_frame[None], props.segments, axis=0), np.zeros(3), 0.0),
+                            self.path_contact)
+                check_held_paths(place_path, [clip.arc_length for clip in problem.clips], self.path_contact)
+                check_clear(f"the buckled hose at fraction {fraction:g} of the place phase (the first step, taken "
+                            "without contact)", props, place_path(fraction), state, self.path_contact)
             state = self._follow("place", place_path, self.place_props, state, log, fraction, control)
             if props.springs is not None:
                 state = phase_in_springs(props, place_path(1.0), state, log, self.progress)
@@ -396,6 +296,9 @@ class _Sequence:
         if self.path_contact is None:
             state, report = solve_equilibrium(props, final, state, tolerance=control.tolerance)
         else:
+            from hoseline.mechanics.contact_newton import solve_with_contact
+            from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
+
             state, report = solve_with_contact(props, final, state, self.path_contact,
                                                tolerance=max(control.tolerance, CONTACT_TOLERANCE))
         log.iterations += report.iterations
@@ -407,6 +310,8 @@ class _Sequence:
         if any(clip.sliding for clip in final.clips):
             final, state, report = _remesh_sliding(props, final, state, report, control.tolerance, log)
         if self.path_contact is not self.contact:  # the obstacles brought in to the placed hose
+            from hoseline.procedures.contact.bring_in import bring_in
+
             sides = problem.contact_sides or (None,) * len(problem.contact)
             state, brought_in, residual = bring_in(problem.contact, sides, props, final, state, self.contact,
                                                    control=control, log=log, progress=self.progress)

@@ -15,6 +15,7 @@ from hoseline.mechanics.stability import smallest_eigenpairs
 from hoseline.model.mounts import single_plane_offset
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.hose_health import station_moments
+from hoseline.procedures.placement.path import PlacementPath
 from hoseline.procedures.placement.result import ClipReaction, Result
 
 NEUTRAL_MARGIN = 1e-6  # margins below this fraction of the load scale (neutral_scale) are rounding of an exact zero
@@ -134,8 +135,6 @@ def locked_clip_rolls(problem: Problem, clamps: Clamps) -> list[float | None]:
     """The roll (degrees, right-handed about the clip direction) at which `clamps` hold each fixed clip, measured
     from the frame the place phase carries the clip to with its roll free (PlacementPath.place(1)); None for
     the other kinds.  The placement locks a fixed clip at the torque-free roll of the end of the place phase."""
-    from hoseline.procedures.placement.sequence import PlacementPath  # sequence.py imports this module
-
     carried = PlacementPath(problem).place(1.0).clips
     return [
         math.degrees(math.atan2(float(held.frame[0] @ free.frame[1]), float(held.frame[0] @ free.frame[0])))

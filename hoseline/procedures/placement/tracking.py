@@ -55,7 +55,8 @@ from hoseline.procedures.placement.continuation import (
     relax_to_stable,
 )
 from hoseline.procedures.placement.result import Result
-from hoseline.procedures.placement.sequence import rod_properties, weight_vector
+from hoseline.procedures.placement.path import weight_vector
+from hoseline.procedures.placement.sequence import rod_properties
 from hoseline.procedures.placement.stations import build_result
 
 JUMP_FACTOR = 3.0  # a step moving a station more than this times the fittings' movement is followed in sub-steps

@@ -19,7 +19,8 @@ from hoseline.mechanics.newton import node_positions
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.continuation import ContinuationLog, PlacementError, StepControl, follow
-from hoseline.procedures.placement.sequence import PlacementPath, rod_properties, solve
+from hoseline.procedures.placement.path import PlacementPath
+from hoseline.procedures.placement.sequence import rod_properties, solve
 
 JUMP_FACTOR = 3.0
 JUMP_FLOOR = 1.0  # mm

@@ -46,7 +46,8 @@ from hoseline.model.preset import Preset
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.scans.deviation import Deviation, Thresholds, closest_on_polyline, deviation
-from hoseline.procedures.placement.sequence import PlacementPath, rod_properties, solve
+from hoseline.procedures.placement.path import PlacementPath
+from hoseline.procedures.placement.sequence import rod_properties, solve
 from hoseline.procedures.scans.parameters import BRAID_PARAMETERS, PARAMETERS
 
 UNIDENTIFIABLE_RELATIVE_STD = 0.25

@@ -43,6 +43,7 @@ from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 from scipy.spatial import cKDTree, distance_matrix
 
 from hoseline.mechanics.blas_threads import one_blas_thread
+from hoseline.procedures.scans.cloud_checks import check_count, check_spread
 from hoseline.procedures.scans.cylinder_fit import fit_cylinder
 from hoseline.procedures.scans.deviation import closest_on_polyline
 from hoseline.procedures.scans.voxel_cloud import VoxelCloud, voxel_cloud
@@ -53,6 +54,8 @@ GUIDE_POINTS = 1500  # the spanning tree is built on at most this many axis poin
 VOXELS_PER_RADIUS = 10  # default voxel edge: a tenth of the radius
 GUIDE_VOXELS_PER_RADIUS = 4  # the guide and the first pass of fits use a coarser grid: a quarter of the radius
 CHUNK = 200_000  # points per block in the neighbour computations (bounds their memory)
+MAX_STATIONS = 100_000  # stations along a guide (a 10 m hose at 0.1 mm): more is a scan the fit went astray on
+AXIS_SAMPLES_PER_STATION = 10  # the second pass samples the fitted axis every tenth of a spacing
 
 
 @dataclass
@@ -119,7 +122,8 @@ def fit_centerline(
     use a grid of at least a quarter of the radius.
     every_point: fit the final cylinders to every point that is not an outlier rather than
     to the voxel centroids (slow: the reference the voxel grid is measured against).
-    Raises ValueError when the points do not form a hose-like shape.
+    Raises ValueError when the points do not form a hose-like shape (cloud_checks.py: too few distinct
+    points, or on a line or a plane; or a guide or axis of more than MAX_STATIONS stations).
     """
     if not nominal_radius > 0.0:
         raise ValueError(f"nominal radius = {nominal_radius!r}: give the hose's outer radius in mm")
@@ -130,16 +134,19 @@ def fit_centerline(
         raise ValueError(f"voxel = {voxel!r}: give the voxel edge in mm, 0 or more")
     points = np.asarray(points, dtype=float)
     grid = voxel_cloud(points, voxel)
-    coarse = voxel_cloud(grid.points, max(voxel, nominal_radius / GUIDE_VOXELS_PER_RADIUS), weights=grid.counts)
+    coarse_edge = max(voxel, nominal_radius / GUIDE_VOXELS_PER_RADIUS)
+    coarse = voxel_cloud(grid.points, coarse_edge, weights=grid.counts)
+    check_count(coarse.points, nominal_radius, coarse_edge)
     kept_coarse = _not_isolated(coarse)
     kept = kept_coarse[coarse.inverse]
     clean, coarse = grid.subset(kept), coarse.subset(kept_coarse)
+    check_spread(coarse.points, nominal_radius)
     guide = _guide_from_axis_points(_axis_candidates(coarse.points, nominal_radius), nominal_radius, spacing)
     if start_hint is not None and np.linalg.norm(guide[-1] - start_hint) < np.linalg.norm(guide[0] - start_hint):
         guide = guide[::-1]
     first = _fit_sections(coarse, guide, nominal_radius, section, _coverage_gaps(coarse.points, guide, nominal_radius))
     if first.points.shape[0] >= 5:  # second pass along the fitted axis, a spacing longer at both ends
-        axis = _extend(_along_spline(first.points, 0.1 * spacing), spacing)
+        axis = _extend(_along_spline(first.points, spacing / AXIS_SAMPLES_PER_STATION), spacing)
         guide = _resample(axis, spacing, _phase(axis, start_hint, spacing))
     final = clean
     if every_point:
@@ -158,8 +165,8 @@ def _not_isolated(cloud: VoxelCloud) -> np.ndarray:
     scan the stray voxels can outnumber the surface's.
     """
     tree = cKDTree(cloud.points)
-    k = min(9, cloud.points.shape[0])
-    mean = np.concatenate([tree.query(cloud.points[start : start + CHUNK], k=k, workers=-1)[0][:, 1:].mean(axis=1)
+    ranks = np.arange(2, min(9, cloud.points.shape[0]) + 1)  # the nearest neighbours but the point itself
+    mean = np.concatenate([tree.query(cloud.points[start : start + CHUNK], k=ranks, workers=-1)[0].mean(axis=1)
                            for start in range(0, cloud.points.shape[0], CHUNK)])
     median = _weighted_median(mean, cloud.counts)
     spread = 1.4826 * _weighted_median(np.abs(mean - median), cloud.counts)
@@ -228,7 +235,8 @@ def _along_spline(points: np.ndarray, step: float) -> np.ndarray:
     generalised cross-validation): it follows bends and gaps instead of cutting them with chords, so
     arc lengths along it hardly depend on where the points lie."""
     t = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
-    return make_smoothing_spline(t, points)(np.linspace(0.0, t[-1], int(np.ceil(t[-1] / step)) + 1))
+    samples = _station_count(t[-1], step, MAX_STATIONS * AXIS_SAMPLES_PER_STATION, "the fitted axis")
+    return make_smoothing_spline(t, points)(np.linspace(0.0, t[-1], samples))
 
 
 def _extend(polyline: np.ndarray, length: float) -> np.ndarray:
@@ -252,10 +260,21 @@ def _phase(polyline: np.ndarray, start_hint: np.ndarray | None, spacing: float) 
 def _resample(polyline: np.ndarray, spacing: float, first: float = 0.0) -> np.ndarray:
     """Points every `spacing` mm of arc length along a polyline from arc length `first` (both ends if it is short)."""
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(polyline, axis=0), axis=1))])
+    _station_count(s[-1] - first, spacing, MAX_STATIONS, "the guide along the scan")
     stations = np.arange(first, s[-1], spacing)
     if stations.size < 2:
         stations = np.array([0.0, s[-1]])
     return np.column_stack([np.interp(stations, s, polyline[:, k]) for k in range(3)])
+
+
+def _station_count(length: float, step: float, largest: int, what: str) -> int:
+    """Points every `step` mm along `length` mm, both ends included; ValueError naming `what` when more than
+    `largest` (or the length is not finite): the scan led the fit astray."""
+    count = length / step + 1.0
+    if not count <= largest:
+        raise ValueError(f"{what} is {length:.4g} mm long: {count:.4g} points {step:.3g} mm apart, more than {largest}; "
+                         "the scan does not show one hose of this radius (check the radius and that the scan is in mm)")
+    return int(np.ceil(length / step)) + 1
 
 
 def _fit_sections(cloud: VoxelCloud, guide: np.ndarray, radius: float, section: float,
@@ -280,7 +299,9 @@ def _fit_sections(cloud: VoxelCloud, guide: np.ndarray, radius: float, section: 
             counts = cloud.counts[near]
             total = counts.sum()
             if total >= MIN_SECTION_POINTS and min(counts[along < 0].sum(), counts[along > 0].sum()) >= 0.25 * total:
-                fits.append((index, fit_cylinder(cloud.points[near], counts, centre, tangent, radius)))
+                fit = fit_cylinder(cloud.points[near], counts, centre, tangent, radius)
+                if np.linalg.norm(fit["axis_point"] - centre) <= reach:  # else an axis away from its points: astray
+                    fits.append((index, fit))
             # else: too few points, or points on one side of the station only (an end): no station
         fixed_radius = np.median([f["radius"] for _, f in fits if f["radius_fitted"]] or [radius])
         fits = [(i, fit_cylinder(f["points"], f["weights"], f["axis_point"], f["tangent"], fixed_radius, False))

@@ -33,20 +33,17 @@ import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.clipped_newton import clip_arc_lengths, clip_reactions, station_positions
-from hoseline.mechanics.contact_newton import ContactModel, solve_with_contact
 from hoseline.mechanics.newton import NewtonReport, node_positions, solve_equilibrium
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
 from hoseline.model.motion import Pose, interpolate
 from hoseline.model.mounts import Mount, single_plane_offset
 from hoseline.model.sweep import SweepProblem
-from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE, follow_contact
-from hoseline.procedures.contact.moving import MovingObstacles, ObstaclePath, PlacedObstacles
-from hoseline.procedures.contact.placement import contact_reports, problem_contact_model
 from hoseline.procedures.geometry.clearance import TriangleIndex, nearest_with_fittings
 from hoseline.procedures.placement.continuation import (
     ContinuationLog,
@@ -57,9 +54,17 @@ from hoseline.procedures.placement.continuation import (
     secant,
 )
 from hoseline.procedures.placement.hose_health import hose_health
-from hoseline.procedures.placement.sequence import rod_properties, solve, weight_vector
+from hoseline.procedures.placement.path import weight_vector
+from hoseline.procedures.placement.sequence import rod_properties, solve
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.sweep.result import ObstacleClearance, Snap, SweepContact, SweepResult
+
+if TYPE_CHECKING:
+    from hoseline.mechanics.contact_newton import ContactModel
+    from hoseline.procedures.contact.moving import PlacedObstacles
+
+# The contact modules (procedures/contact/, mechanics/contact*.py, with SciPy's sparse graphs) are imported where a
+# sweep with contact uses them, so that one without contact does not load them.
 
 JUMP_FACTOR = 3.0  # a step moving a station more than this times the mounts' movement is followed in sub-steps
 CAREFUL = StepControl(first=0.1, largest=0.1)  # sub-steps of a suspicious step
@@ -116,8 +121,12 @@ class _Tracker:
                               np.array([clip.force for clip in assembly.clips]).reshape(count, 3), np.zeros(count),
                               np.array([clip.arc_length for clip in assembly.clips]))
         self.before: RodState | None = None  # the equilibrium one pose back, for the secant predictor
-        self.obstacles = (MovingObstacles(problem_contact_model(sweep.problem), contact_bodies)
-                          if sweep.problem.has_contact else None)
+        self.obstacles = None
+        if sweep.problem.has_contact:
+            from hoseline.procedures.contact.moving import MovingObstacles
+            from hoseline.procedures.contact.placement import problem_contact_model
+
+            self.obstacles = MovingObstacles(problem_contact_model(sweep.problem), contact_bodies)
         self.placed = self.obstacles.at(self.poses) if self.obstacles is not None else None
         self.clamps_now = self.clamps(self.poses)  # the clamps of the equilibrium reached last
         self.nodes = stations(self.props, self.clamps_now, self.state)  # its stations, mm
@@ -174,6 +183,9 @@ class _Tracker:
             if self.obstacles is None:
                 trial = follow(f"step to pose {index}", path, self.props, self.state, self.log, control=control)
             else:
+                from hoseline.procedures.contact.continuation import follow_contact
+                from hoseline.procedures.contact.moving import ObstaclePath
+
                 trial = follow_contact(f"step to pose {index}", path, self.props, self.state,
                                        ObstaclePath(self.obstacles, poses), control=control, log=self.log,
                                        before=self.before)[0]
@@ -200,6 +212,9 @@ class _Tracker:
         triangle strut of bench/bench_contact_placement.py).  Where it does not, as before: from the prediction or the
         last equilibrium, the first the move check admits, with the step filter.  After k refused tries in a row the
         next 2^k - 1 poses (at most UNFILTERED_WAITING) are solved the filtered way at once."""
+        from hoseline.mechanics.contact_newton import solve_with_contact
+        from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
+
         before = (self.clamps_now, self.state, self.placed)
         spent = 0
         if self.unfiltered_waiting > 0:
@@ -373,6 +388,8 @@ def _run_sweep(sweep: SweepProblem, progress: Progress | None, equilibria: list 
 def _contacts_at(index: int, tracker: _Tracker, reached: _Reached) -> tuple[list, np.ndarray]:
     """The contact reports and the contact forces beyond each station (procedures/contact/placement.contact_reports)
     at pose `index`; PlacementError if the hose enters anything there (the contact solver's guarantee failed)."""
+    from hoseline.procedures.contact.placement import contact_reports
+
     reports, beyond = contact_reports(tracker.sweep.problem, tracker.props, reached.clamps, reached.state,
                                       reached.contact)
     worst = min(reports, key=lambda report: report.min_gap)

@@ -26,7 +26,8 @@ from hoseline.mechanics.newton import RodProperties, end_frame_of, evaluate, sol
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.mechanics.rotations import frame_from_tangent, rotation_matrix, rotation_vector
 from hoseline.model.problem import Problem
-from hoseline.procedures.placement.sequence import PlacementPath, place_only, rod_properties
+from hoseline.procedures.placement.path import PlacementPath
+from hoseline.procedures.placement.sequence import place_only, rod_properties
 from hoseline.procedures.variation.tolerances import COORDINATES, INDEX, perturbed, tilt_axes
 
 EQUILIBRIUM = 1e-8  # relative residual below which the reconstructed nominal equilibria are accepted
