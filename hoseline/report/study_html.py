@@ -139,7 +139,7 @@ def _design_table(outcome: StudyOutcome) -> str:
         optimised = sum(r.optimised for r in design.refined)
         intro += (f"<p>Optimiser: for each of the {len(design.refined)} lengths with a grid candidate meeting every "
                   f"limit, the margin of {html.escape(grid.rank_by)} maximised over the clocking between the grid points "
-                  f"either side of its best candidate (Brent's bounded method, to {CLOCKING_TOLERANCE:g} deg); "
+                  f"either side of its best candidate, every limit a constraint (COBYQA, to {CLOCKING_TOLERANCE:g} deg); "
                   f"{optimised} improved on the grid, the others keep the grid's clocking (column \"clocking from\"). "
                   f"{sum(r.evaluations for r in design.refined)} candidates solved. The table ranks these; the heat map "
                   "shows the grid, the optimiser's candidates as crosses.</p>")
