@@ -187,25 +187,26 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
     assert "d clearance:post [mm per unit]" in rows[0] and "first_order" in summary
 
 
-@pytest.mark.parametrize("change, message", [
-    ('parameter = "hose.bending_stiffness"', 'vary[2].parameter'),
-    ('distribution = "sphere"\nradius = 1.0\n', "does not apply"),
-    ('sigma = [0.5, 0.5, 1.0]\nradius = 2.0', "takes sigma only: remove radius"),
-    ('[limits]\nbend_radius = 36.0', "limits.bendradius: unknown quantity"),
+@pytest.mark.parametrize("old, new, message", [
+    ('parameter = "hose.bending_stiffness"', 'parameter = "hose.bending_stiff"', 'vary[2].parameter'),
+    ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "sphere"\nradius = 1.0', "does not apply"),
+    ('distribution = "loguniform"', 'distribution = "weibull"', 'vary[2] (hose.bending_stiffness): distribution = '
+                                                                '"weibull" does not apply'),
+    ("sigma = [0.5, 0.5, 1.0]", "sigma = [0.5, 0.5, 1.0]\nradius = 2.0", "takes sigma only: remove radius"),
+    ('distribution = "normal"\nsigma = [0.5, 0.5, 1.0]', 'distribution = "uniform"\ntolerance = [-0.5, 0.5, 1.0]',
+     "vary[0] (end.point): end.point: uniform tolerance_x = -0.5, tolerance_y = 0.5, tolerance_z = 1: each must be "
+     "zero or positive"),
+    ('distribution = "normal"\nsigma = [0.5, 0.5, 1.0]', 'distribution = "uniform"\ntolerance = 0.0',
+     "vary[0] (end.point): end.point: uniform tolerance_x = 0, tolerance_y = 0, tolerance_z = 0: each must be zero or "
+     "positive, and not all zero"),
+    ("sigma = [0.5, 0.5, 1.0]", "sigma = [0.5, -0.5, 1.0]", "sigma_y = -0.5"),
+    ("bend_radius = 36.0", "bendradius = 36.0", "limits.bendradius: unknown quantity"),
 ])
-def test_bad_study_files_are_refused_naming_the_field(tmp_path, change, message):
+def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):
     """Exit code 2, one line naming the field and the fix, nothing written."""
-    text = PLACEMENT_STUDY
-    if change.startswith("parameter"):
-        text = text.replace('parameter = "hose.bending_stiffness"', 'parameter = "hose.bending_stiff"')
-    elif change.startswith("distribution"):
-        text = text.replace('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "sphere"\nradius = 1.0')
-    elif change.startswith("sigma"):
-        text = text.replace("sigma = [0.5, 0.5, 1.0]", "sigma = [0.5, 0.5, 1.0]\nradius = 2.0")
-    else:
-        text = text.replace("bend_radius = 36.0", "bendradius = 36.0")
+    assert old in PLACEMENT_STUDY
     (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
-    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "study.toml").write_text(PLACEMENT_STUDY.replace(old, new, 1), encoding="utf-8")
     result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"), "--workers", "0")
     assert result.exit_code == 2
     assert message in result.output.replace("\n", " ")

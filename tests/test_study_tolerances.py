@@ -97,6 +97,12 @@ def test_bad_tolerances_are_refused_with_the_fix():
         Tolerance("hose.length", "sphere", (1.0,))
     with pytest.raises(ValueError, match="above 1"):
         Tolerance("hose.bending_stiffness", "lognormal", (0.5,))
+    with pytest.raises(ValueError, match="tolerance_y = -1, tolerance_z = 0: each must be zero or positive"):
+        Tolerance("end.point", "uniform", (1.0, -1.0, 0.0))
+    with pytest.raises(ValueError, match="not all zero"):
+        Tolerance("clips[0].point", "uniform", (0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="radius = -1"):
+        Tolerance("start.point", "sphere", (-1.0,))
 
 
 @pytest.mark.parametrize("method", ["monte-carlo", "latin-hypercube", "sobol"])

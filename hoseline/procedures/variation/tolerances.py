@@ -138,18 +138,21 @@ class Tolerance:
         size = tuple(float(v) for v in self.size)
         if len(size) != len(names) or not all(math.isfinite(v) for v in size):
             raise ValueError(f"{self.parameter}: {self.distribution} needs {', '.join(names)}, finite numbers")
-        if self.distribution == "uniform":
-            if kind in ("offset", "factor") and not size[0] < size[1]:
+        if self.distribution == "uniform" and kind in ("offset", "factor"):
+            if not size[0] < size[1]:
                 raise ValueError(f"{self.parameter}: uniform range [{size[0]:g}, {size[1]:g}] must have low < high")
             if kind == "factor" and size[0] <= 0.0:
                 raise ValueError(f"{self.parameter}: a factor range must stay positive, got low = {size[0]:g}")
         elif self.distribution in ("lognormal", "loguniform"):
             if not size[0] > 1.0:
                 raise ValueError(f"{self.parameter}: factor = {size[0]:g} must be above 1 (e.g. 2 for a factor of two)")
-        elif self.distribution == "cone" and not 0.0 < size[0] < 90.0:
-            raise ValueError(f"{self.parameter}: cone angle = {size[0]:g} must lie in (0, 90) degrees")
-        elif any(v < 0.0 for v in size) or max(size) == 0.0:
-            raise ValueError(f"{self.parameter}: {', '.join(names)} must be zero or positive, not all zero")
+        elif self.distribution == "cone":
+            if not 0.0 < size[0] < 90.0:
+                raise ValueError(f"{self.parameter}: cone angle = {size[0]:g} must lie in (0, 90) degrees")
+        elif any(v < 0.0 for v in size) or max(size) == 0.0:  # the spreads: sigma, +-tolerance, radius
+            given = ", ".join(f"{name} = {value:g}" for name, value in zip(names, size))
+            raise ValueError(f"{self.parameter}: {self.distribution} {given}: each must be zero or positive, and not "
+                             "all zero (a tolerance of zero everywhere varies nothing: remove the entry)")
         object.__setattr__(self, "size", size)
 
     @property
