@@ -10,6 +10,9 @@ order they finish; batches already done (a resumed study) are not run again.
 Where: a LocalCluster of `workers` processes on this machine (default: one per core; loopback
 only, its dashboard on a free port), an existing cluster (a scheduler address tcp://HOST:PORT or
 a scheduler file), or, with workers = 0, in this process without Dask (small runs and tests).
+An existing cluster's address is checked first (scheduler.scheduler_address: the file read, the
+port opened within a second), so a wrong address is refused at once, before any solving, rather
+than after Dask's CONNECT_SECONDS.
 Since every sample depends only on its index and deviations, the numbers are the same whichever
 is used.
 """
@@ -26,14 +29,11 @@ import numpy as np
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed
 
 from hoseline.procedures.variation.samples import StudyContext, evaluate_batch
+from hoseline.procedures.variation.scheduler import ClusterError, scheduler_address
 
-CONNECT_SECONDS = 30  # waiting for an existing scheduler
+CONNECT_SECONDS = 30  # waiting for an existing scheduler (once its port was seen open)
 MAX_BATCH = 200  # samples per task at most (about a second of work for a placement)
 BATCHES_PER_RUN = 64  # the default batch size aims at this many tasks
-
-
-class ClusterError(RuntimeError):
-    """The Dask cluster could not be started or reached; the message says which and why."""
 
 
 def default_batch_size(count: int) -> int:
@@ -110,10 +110,8 @@ class Engine:
                 self.cluster = LocalCluster(n_workers=self.where.local_workers(), threads_per_worker=1, processes=True,
                                             host="127.0.0.1", dashboard_address=":0", silence_logs=logging.ERROR)
                 self.client = Client(self.cluster)
-            elif os.path.isfile(scheduler):
-                self.client = Client(scheduler_file=scheduler, timeout=CONNECT_SECONDS)
             else:
-                self.client = Client(scheduler, timeout=CONNECT_SECONDS)
+                self.client = Client(scheduler_address(scheduler), timeout=CONNECT_SECONDS)
         except (OSError, TimeoutError, ValueError) as exc:
             self.__exit__()
             raise ClusterError(f"cannot start or reach the Dask cluster ({self.where.describe()}): {exc}") from None

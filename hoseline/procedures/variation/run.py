@@ -16,6 +16,7 @@ import numpy as np
 from hoseline.procedures.placement.continuation import PlacementError, Progress
 from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
+from hoseline.procedures.variation.scheduler import scheduler_address
 from hoseline.procedures.variation.samples import StudyContext, nominal_context
 from hoseline.procedures.variation.sensitivity import placement_sensitivities
 from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
@@ -49,10 +50,12 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
 
     stores: stage name ("samples", "design", "optimise") -> its BatchStore (default: in memory).  where: where the
     batches run.  progress: callable(phase, fraction).  Raises PlacementError when the nominal hose
-    cannot be solved.
+    cannot be solved, ClusterError at once (before any solving) when an existing cluster cannot be reached.
     """
     stores = stores or (lambda stage: MemoryStore())
     started = time.perf_counter()
+    if where.scheduler is not None:
+        where = replace(where, scheduler=scheduler_address(where.scheduler))
     context, nominal = nominal_context(study.base, warm=study.sampling.start == "nominal")
     notes = []
     sensitivities = None
