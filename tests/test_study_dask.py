@@ -242,3 +242,42 @@ def test_failed_samples_are_kept_with_their_reason():
     assert probability.failed == failed.sum() and probability.solved == len(failed) - failed.sum()
     assert probability.estimate == 1.0 and probability.high_with_failed == 1.0
     assert outcome.spreads[0].solved == probability.solved
+    # one cause, however many samples, with their indexes (the lengths differ, the cause does not)
+    (cause,) = outcome.failures
+    assert cause.count == failed.sum() and cause.samples == tuple(np.flatnonzero(failed))
+    assert cause.cause == ("ValueError: hose.length = # mm is not longer than the mount distance # mm: an inextensible "
+                           "hose cannot reach; use a hose longer than # mm")
+    assert cause.example == outcome.samples["reason"][cause.samples[0]]
+
+
+def test_failures_are_grouped_by_cause_and_a_fault_of_the_program_stops_the_study(monkeypatch):
+    """Samples failing with the solver's own errors are grouped by cause (the numbers left out, names such as
+    clips[1] kept); any other exception (here a TypeError, as a programming error would raise) is not recorded as
+    a failed sample but raised."""
+    from hoseline.procedures.placement.continuation import PlacementError
+    from hoseline.procedures.variation import samples
+    from hoseline.procedures.variation.study import failure_causes
+
+    reasons = np.array(["", "PlacementError: phase 'twist' failed at fraction 0.7458: residual 2.29e-06",
+                        "ValueError: clips[1].direction: a ball clip holds no direction to vary",
+                        "PlacementError: phase 'twist' failed at fraction 0.12: residual 3e-7", "",
+                        "ValueError: clips[0].direction: a ball clip holds no direction to vary"])
+    causes = failure_causes(reasons, reasons != "")
+    assert [(c.cause, c.count, c.samples) for c in causes] == [
+        ("PlacementError: phase 'twist' failed at fraction #: residual #", 2, (1, 3)),
+        ("ValueError: clips[1].direction: a ball clip holds no direction to vary", 1, (2,)),
+        ("ValueError: clips[0].direction: a ball clip holds no direction to vary", 1, (5,))]
+
+    context = samples.StudyContext(StudyBase(demo_problem(0.0, 10)), np.zeros((1, 11, 3)))
+    for error, recorded in ((PlacementError("no path"), True), (ValueError("too short"), True),
+                            (TypeError("a bug"), False), (IndexError("a bug"), False)):
+        def read(self, problem, error=error):
+            raise error
+
+        monkeypatch.setattr(samples.StudyBase, "read", read)
+        if recorded:
+            out = samples.evaluate_batch(context, np.arange(2), np.zeros((2, 15)))
+            assert out["failed"].all() and out["reason"][0] == f"{type(error).__name__}: {error}"
+        else:
+            with pytest.raises(type(error), match="a bug"):
+                samples.evaluate_batch(context, np.arange(2), np.zeros((2, 15)))

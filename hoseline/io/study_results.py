@@ -203,7 +203,8 @@ def study_document(outcome: StudyOutcome) -> dict:
              "broken": p.broken, "solved": p.solved, "failed": p.failed, "worst_sample": w}
             for p, w in zip(outcome.probabilities, outcome.worst)
         ],
-        "failures": outcome.failures,
+        "failures": [{"cause": f.cause, "count": f.count, "samples": list(f.samples), "example": f.example}
+                     for f in outcome.failures],
         "notes": outcome.notes,
         "run": outcome.run,
     }

@@ -25,6 +25,8 @@ from hoseline.report.study_figures import (
 )
 from hoseline.report.sweep_html import STYLE, _format, _performance_table
 
+SAMPLES_LISTED = 20  # sample indexes shown per failure cause (summary.json lists them all)
+
 
 def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_text: str = "") -> str:
     """The whole page.  envelope: the envelope mesh of the samples, or None.  input_text: the study file."""
@@ -66,12 +68,21 @@ def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_te
     if outcome.design is not None:
         parts += ["<h2>Design search</h2>", _design_table(outcome), _figure(design_figure(outcome))]
     if outcome.failures:
-        parts += ["<h2>Failed samples</h2>", "<table><tr><th>reason</th><th>samples</th></tr>"
-                  + "".join(f"<tr><td>{html.escape(r)}</td><td class=\"number\">{n}</td></tr>"
-                            for r, n in outcome.failures.items()) + "</table>"]
+        parts += ["<h2>Failed samples</h2>", "<p>Grouped by cause (the reason with its numbers as #); every failed "
+                  "sample and its whole reason are in samples.csv.</p>",
+                  "<table><tr><th>cause</th><th>samples</th><th>which</th><th>for example</th></tr>"
+                  + "".join(f"<tr><td>{html.escape(f.cause)}</td><td class=\"number\">{f.count}</td>"
+                            f"<td>{_sample_list(f.samples)}</td><td>{html.escape(f.example)}</td></tr>"
+                            for f in outcome.failures) + "</table>"]
     parts += ["<h2>Run</h2>", _performance_table(outcome.run), "<h2>Input</h2>",
               f"<pre>{html.escape(input_text)}</pre>" if input_text else "<p>(no input file)</p>", "</body></html>"]
     return "\n".join(parts)
+
+
+def _sample_list(samples: tuple[int, ...]) -> str:
+    """The sample indexes of a failure cause, the first SAMPLES_LISTED of them."""
+    listed = ", ".join(str(k) for k in samples[:SAMPLES_LISTED])
+    return listed + (f", ... ({len(samples) - SAMPLES_LISTED} more)" if len(samples) > SAMPLES_LISTED else "")
 
 
 def _figure(figure) -> str:

@@ -43,7 +43,7 @@ import numpy as np
 from scipy.optimize import Bounds, NonlinearConstraint, minimize
 
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit
-from hoseline.procedures.variation.samples import StudyContext, evaluate_batch
+from hoseline.procedures.variation.samples import StudyContext, evaluate_batch, failure_cause
 from hoseline.procedures.variation.tolerances import INDEX
 
 DESIGN_PERCENTILE = 5.0  # with tolerances, a limit is met when this percentile of its margin is not negative
@@ -124,7 +124,8 @@ class Refined:
 @dataclass
 class DesignOutcome:
     """The judged grid: margins (L, C, limits) mm or the quantity's unit (the 5th percentile with tolerances;
-    NaN where the candidate failed), failed (L, C) how many of its samples failed, the reasons, and the ranking
+    NaN where the candidate failed), failed (L, C) how many of its samples failed, the causes of the failures
+    (samples.failure_cause), and the ranking
     (indexes (i, j) into lengths x clockings of the candidates meeting every limit, best first).  With the
     optimiser, refined: one per length that has a grid cell meeting every limit, ranked best first (the
     table is then theirs)."""
@@ -179,7 +180,7 @@ def judge(grid: DesignGrid, limits: tuple[Limit, ...], names: list[str], samples
     rank = [limit.quantity.name for limit in limits].index(grid.rank_by)
     feasible = [(i, j) for i in range(shape[0]) for j in range(shape[1]) if meets_every_limit(margins[i, j])]
     feasible.sort(key=lambda ij: (-margins[ij[0], ij[1], rank], abs(grid.clockings[ij[1]]), grid.lengths[ij[0]]))
-    reasons = sorted({str(r) for r in samples["reason"][samples["failed"]]})
+    reasons = sorted({failure_cause(str(r)) for r in samples["reason"][samples["failed"]]})
     return DesignOutcome(grid, limits, margins, failed.sum(axis=2), reasons, feasible)
 
 
