@@ -23,6 +23,7 @@ import logging
 import math
 import os
 from collections.abc import Callable, Collection
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 
 import numpy as np
@@ -93,34 +94,58 @@ class Engine:
     """Runs batches where `where` says; a context manager (the cluster, if it started one, closes on exit).
 
         with Engine(Where(workers=2)) as engine:
+            ...                                   # the cluster starts and warms meanwhile
             engine.run(context, coordinates, batch_size, on_batch, done=set())
+
+    Entering starts the cluster (and warms its workers) in a background thread and returns at once, so
+    the caller's own work before the first batch (the nominal hose, the sensitivities) overlaps the
+    workers' start-up; `client` waits for it and raises ClusterError if it failed.
     """
 
     def __init__(self, where: Where = Where()) -> None:
         self.where = where
-        self.client: Client | None = None
         self.cluster: LocalCluster | None = None
+        self._client: Client | None = None
+        self._starter: ThreadPoolExecutor | None = None
+        self._started: Future | None = None
 
     def __enter__(self) -> "Engine":
+        if self.where.scheduler is not None or self.where.workers != 0:
+            self._starter = ThreadPoolExecutor(max_workers=1, thread_name_prefix="hoseline-cluster-start")
+            self._started = self._starter.submit(self._start)
+        return self
+
+    def _start(self) -> None:
+        """Start or reach the cluster and warm its workers (raises ClusterError)."""
         scheduler = self.where.scheduler
-        if scheduler is None and self.where.workers == 0:
-            return self
         try:
             if scheduler is None:
                 self.cluster = LocalCluster(n_workers=self.where.local_workers(), threads_per_worker=1, processes=True,
                                             host="127.0.0.1", dashboard_address=":0", silence_logs=logging.ERROR)
-                self.client = Client(self.cluster)
+                self._client = Client(self.cluster)
             else:
-                self.client = Client(scheduler_address(scheduler), timeout=CONNECT_SECONDS)
+                self._client = Client(scheduler_address(scheduler), timeout=CONNECT_SECONDS)
         except (OSError, TimeoutError, ValueError) as exc:
-            self.__exit__()
             raise ClusterError(f"cannot start or reach the Dask cluster ({self.where.describe()}): {exc}") from None
-        self.client.register_plugin(WarmSolver())
-        return self
+        self._client.register_plugin(WarmSolver())
+
+    def ready(self) -> None:
+        """Wait until the cluster is up and its workers warm (at once without Dask); raises ClusterError if it failed."""
+        if self._started is not None:
+            self._started.result()
+
+    @property
+    def client(self) -> Client | None:
+        """The Dask client once the cluster is ready (None without Dask)."""
+        self.ready()
+        return self._client
 
     def __exit__(self, *exc) -> None:
-        if self.client is not None:
-            self.client.close()
+        if self._started is not None:
+            wait([self._started])  # a start still running finishes before it is closed
+            self._starter.shutdown()
+        if self._client is not None:
+            self._client.close()
         if self.cluster is not None:
             self.cluster.close()
 
@@ -143,16 +168,17 @@ class Engine:
         todo = [k for k in range(len(slices)) if k not in done]
         if not todo:
             return
-        if self.client is None:
+        client = self.client
+        if client is None:
             for k in todo:
                 on_batch(k, evaluate_batch(context, indices[slices[k]], coordinates[slices[k]]))
             return
         # hash=False: a key of its own, so that releasing an earlier stage's copy of an equal context cannot drop it
-        shared = self.client.scatter(context, broadcast=True, hash=False)
+        shared = client.scatter(context, broadcast=True, hash=False)
         futures = {}
         for k in todo:
             rows = slices[k]
-            futures[self.client.submit(evaluate_batch, shared, indices[rows], coordinates[rows], pure=False)] = k
+            futures[client.submit(evaluate_batch, shared, indices[rows], coordinates[rows], pure=False)] = k
         for future, arrays in as_completed(futures, with_results=True):
             on_batch(futures[future], arrays)
 
@@ -163,11 +189,12 @@ class Engine:
         todo = [k for k in range(len(items)) if k not in done]
         if not todo:
             return
-        if self.client is None:
+        client = self.client
+        if client is None:
             for k in todo:
                 on_result(k, function(context, items[k]))
             return
-        shared = self.client.scatter(context, broadcast=True, hash=False)
-        futures = {self.client.submit(function, shared, items[k], pure=False): k for k in todo}
+        shared = client.scatter(context, broadcast=True, hash=False)
+        futures = {client.submit(function, shared, items[k], pure=False): k for k in todo}
         for future, result in as_completed(futures, with_results=True):
             on_result(futures[future], result)

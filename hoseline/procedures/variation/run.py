@@ -56,22 +56,24 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     started = time.perf_counter()
     if where.scheduler is not None:
         where = replace(where, scheduler=scheduler_address(where.scheduler))
-    context, nominal = nominal_context(study.base, warm=study.sampling.start == "nominal")
-    notes = []
-    sensitivities = None
-    if study.sensitivities and study.variation.tolerances:
-        try:
-            if study.base.sweep is not None:
-                sensitivities = sweep_sensitivities(study.base.sweep, study.variation.varied)
+    with Engine(where) as engine:  # the cluster starts and warms while the nominal hose and sensitivities are solved
+        context, nominal = nominal_context(study.base, warm=study.sampling.start == "nominal")
+        notes = []
+        sensitivities = None
+        if study.sensitivities and study.variation.tolerances:
+            try:
+                if study.base.sweep is not None:
+                    sensitivities = sweep_sensitivities(study.base.sweep, study.variation.varied)
+                else:
+                    sensitivities = placement_sensitivities(study.base.problem, study.variation.varied)
+            except (PlacementError, ValueError) as exc:
+                notes.append(f"no sensitivities: {exc}")
             else:
-                sensitivities = placement_sensitivities(study.base.problem, study.variation.varied)
-        except (PlacementError, ValueError) as exc:
-            notes.append(f"no sensitivities: {exc}")
-        else:
-            notes.extend(sensitivities.kinks)
-    coordinates = study.coordinates()
-    timings = {}
-    with Engine(where) as engine:
+                notes.extend(sensitivities.kinks)
+        coordinates = study.coordinates()
+        tick = time.perf_counter()
+        engine.ready()
+        timings = {"cluster": time.perf_counter() - tick}
         tick = time.perf_counter()
         samples = _stage(engine, "samples", context, coordinates, study.sampling.batch_size(), stores, progress)
         timings["samples"] = time.perf_counter() - tick
@@ -102,6 +104,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         "where": where.describe(),
         "samples": len(coordinates),
         "samples per second": len(coordinates) / timings["samples"] if len(coordinates) and timings["samples"] else None,
+        "seconds, waiting for the cluster (after the nominal hose)": timings["cluster"],
         "seconds, samples": timings["samples"],
         "seconds, design search": timings.get("design"),
         "seconds, design optimiser": timings.get("optimiser"),
