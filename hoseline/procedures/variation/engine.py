@@ -23,7 +23,7 @@ import logging
 import math
 import os
 from collections.abc import Callable, Collection
-from concurrent.futures import Future, ThreadPoolExecutor, wait
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -99,7 +99,9 @@ class Engine:
 
     Entering starts the cluster (and warms its workers) in a background thread and returns at once, so
     the caller's own work before the first batch (the nominal hose, the sensitivities) overlaps the
-    workers' start-up; `client` waits for it and raises ClusterError if it failed.
+    workers' start-up; `client` waits for it and raises ClusterError if it failed.  Leaving closes the
+    cluster in that thread too, so the caller's work after the last batch (the statistics, the files)
+    overlaps the workers' shut-down; the interpreter waits for it before it exits.
     """
 
     def __init__(self, where: Where = Where()) -> None:
@@ -141,9 +143,13 @@ class Engine:
         return self._client
 
     def __exit__(self, *exc) -> None:
-        if self._started is not None:
-            wait([self._started])  # a start still running finishes before it is closed
-            self._starter.shutdown()
+        if self._started is None:
+            return
+        self._starter.submit(self._close)  # after the start, in its thread; the caller writes its results meanwhile
+        self._starter.shutdown(wait=False)  # the interpreter still waits for it before it exits
+
+    def _close(self) -> None:
+        """Close the client and the cluster this engine started."""
         if self._client is not None:
             self._client.close()
         if self.cluster is not None:

@@ -72,8 +72,9 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
                 notes.extend(sensitivities.kinks)
         coordinates = study.coordinates()
         tick = time.perf_counter()
+        timings = {"nominal": tick - started}
         engine.ready()
-        timings = {"cluster": time.perf_counter() - tick}
+        timings["cluster"] = time.perf_counter() - tick
         tick = time.perf_counter()
         samples = _stage(engine, "samples", context, coordinates, study.sampling.batch_size(), stores, progress)
         timings["samples"] = time.perf_counter() - tick
@@ -97,6 +98,8 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
                                      deviations)
                 design.refined = ranked_refinements(tasks, _refine(engine, cold, tasks, stores, progress))
                 timings["optimiser"] = time.perf_counter() - tick
+        tick = time.perf_counter()
+    timings["close"] = time.perf_counter() - tick
     outcome = summarize(study, samples, nominal.values(nominal.centerlines), nominal.centerlines, sensitivities)
     outcome.notes[:0] = notes
     outcome.design = design
@@ -104,10 +107,12 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         "where": where.describe(),
         "samples": len(coordinates),
         "samples per second": len(coordinates) / timings["samples"] if len(coordinates) and timings["samples"] else None,
+        "seconds, nominal hose and sensitivities": timings["nominal"],
         "seconds, waiting for the cluster (after the nominal hose)": timings["cluster"],
         "seconds, samples": timings["samples"],
         "seconds, design search": timings.get("design"),
         "seconds, design optimiser": timings.get("optimiser"),
+        "seconds, closing the cluster": timings["close"],
         "seconds, whole study": time.perf_counter() - started,
     }
     return outcome
