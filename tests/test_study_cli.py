@@ -200,6 +200,10 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
      "vary[0] (end.point): end.point: uniform tolerance_x = 0, tolerance_y = 0, tolerance_z = 0: each must be zero or "
      "positive, and not all zero"),
     ("sigma = [0.5, 0.5, 1.0]", "sigma = [0.5, -0.5, 1.0]", "sigma_y = -0.5"),
+    ("sigma = [0.5, 0.5, 1.0]", 'sigma = [0.5, 0.5, 1.0]\nshared_with = ["start.pont"]',
+     'vary[0].shared_with[0] = "start.pont": unknown'),
+    ("sigma = [0.5, 0.5, 1.0]", 'sigma = [0.5, 0.5, 1.0]\nshared_with = ["hose.length"]',
+     "vary[0] (end.point): end.point: shared_with hose.length: a shared deviation moves parameters of one kind"),
     ("bend_radius = 36.0", "bendradius = 36.0", "limits.bendradius: unknown quantity"),
 ])
 def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):

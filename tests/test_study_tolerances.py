@@ -114,3 +114,39 @@ def test_designs_depend_on_the_seed_alone(method):
     assert np.all((first > 0.0) & (first < 1.0))
     if method == "latin-hypercube":
         assert all(sorted(np.floor(first[:, k] * 64).astype(int)) == list(range(64)) for k in range(5))
+
+
+def test_a_shared_contributor_moves_its_parameters_together_with_the_closed_form_variance():
+    """A subframe deviation (sigma) shared by both mounts and the end mount's own (tau), per axis: the mounts' gap
+    end.x - start.x varies by tau alone (the shared part cancels), their sum by 4 sigma^2 + tau^2; without sharing
+    the gap would vary by 2 sigma^2 + tau^2.  The covariance gives these exactly, and 2^16 Sobol draws agree."""
+    sigma, tau = 0.5, 0.3
+    shared = Variation((Tolerance("start.point", "normal", (sigma,) * 3, shared_with=("end.point",)),
+                        Tolerance("end.point", "normal", (tau,) * 3)))
+    gap = np.zeros(len(COORDINATES))
+    gap[INDEX["end.x"]], gap[INDEX["start.x"]] = 1.0, -1.0
+    total = np.abs(gap)
+    covariance = shared.covariance()
+    assert gap @ covariance @ gap == pytest.approx(tau**2, rel=1e-12)
+    assert total @ covariance @ total == pytest.approx(4.0 * sigma**2 + tau**2, rel=1e-12)
+    draws = shared.coordinates(unit_design("sobol", 2**16, shared.dimensions, 3))
+    assert np.var(draws @ gap) == pytest.approx(tau**2, rel=0.02)
+    assert np.var(draws @ total) == pytest.approx(4.0 * sigma**2 + tau**2, rel=0.02)
+    assert np.allclose(np.cov(draws, rowvar=False), covariance, atol=0.02 * sigma**2)
+    independent = Variation((Tolerance("start.point", "normal", (sigma,) * 3), Tolerance("end.point", "normal", (sigma,) * 3),
+                             Tolerance("end.point", "normal", (tau,) * 3)))
+    assert gap @ independent.covariance() @ gap == pytest.approx(2.0 * sigma**2 + tau**2, rel=1e-12)
+    assert shared.varied == tuple(sorted([INDEX[n] for n in ("start.x", "start.y", "start.z", "end.x", "end.y", "end.z")]))
+
+
+def test_a_shared_contributor_of_another_kind_or_unit_is_refused():
+    with pytest.raises(ValueError, match="shared_with hose.mass_per_length: a shared deviation moves parameters of one"):
+        Tolerance("end.point", "normal", (1.0,) * 3, shared_with=("hose.mass_per_length",))
+    with pytest.raises(ValueError, match="shared_with end.twist"):  # both offsets, but mm and degrees
+        Tolerance("hose.length", "normal", (1.0,), shared_with=("end.twist",))
+    with pytest.raises(ValueError, match="lists a parameter twice"):
+        Tolerance("end.point", "sphere", (1.0,), shared_with=("start.point", "start.point"))
+    with pytest.raises(ValueError, match="unknown parameter"):
+        Tolerance("end.point", "sphere", (1.0,), shared_with=("end.pint",))
+    with pytest.raises(ValueError, match=r"clips\[0\].point: the problem has 0 clip"):
+        Variation((Tolerance("end.point", "sphere", (1.0,), shared_with=("clips[0].point",)),))

@@ -37,6 +37,11 @@
     parameter = "end.twist"            # degrees: normal (sigma), uniform (range)
     distribution = "normal"
     sigma = 3.0
+    [[vary]]
+    parameter = "start.point"          # a shared contributor: the same deviation moves every parameter listed
+    shared_with = ["end.point"]        #   (same kind and unit), e.g. the subframe both mounts sit on
+    distribution = "normal"
+    sigma = 0.5
 
     [limits]                           # each optional
     bend_radius = 35.0                 # mm, at least (default: the hose's min_bend_radius)
@@ -123,6 +128,7 @@ class VarySection(_Section):
     factor: float | None = None
     unit: Literal["mm", "%"] = "mm"
     label: str = ""
+    shared_with: list[str] = Field(default_factory=list)
 
 
 class DesignSection(_Section):
@@ -214,13 +220,21 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
     except ValueError:
         raise StudyFileError(f"{source}: vary[{k}].parameter = \"{item.parameter}\": unknown; choose one of "
                              f"{', '.join(PARAMETERS)}, clips[k].point or clips[k].direction") from None
-    clip = clip_index(item.parameter)
+    for j, parameter in enumerate(item.shared_with):
+        try:
+            parameter_kind(parameter)
+        except ValueError:
+            raise StudyFileError(f"{source}: vary[{k}].shared_with[{j}] = \"{parameter}\": unknown; choose one of "
+                                 f"{', '.join(PARAMETERS)}, clips[k].point or clips[k].direction") from None
     clips = base.problem.clips
-    if clip is not None and clip >= len(clips):
-        raise StudyFileError(f"{where}: the base has {len(clips)} clip(s), numbered from 0: give clips[0] to "
-                             f"clips[{len(clips) - 1}]" if clips else f"{where}: the base has no clips")
-    if clip is not None and kind == "tilt" and not clips[clip].holds_direction:
-        raise StudyFileError(f"{where}: clip {clip} is a ball clip: it holds the position only, vary clips[{clip}].point")
+    for parameter in (item.parameter, *item.shared_with):
+        clip = clip_index(parameter)
+        if clip is not None and clip >= len(clips):
+            raise StudyFileError(f"{where}: {parameter}: the base has {len(clips)} clip(s), numbered from 0: give "
+                                 f"clips[0] to clips[{len(clips) - 1}]" if clips else f"{where}: the base has no clips")
+        if clip is not None and kind == "tilt" and not clips[clip].holds_direction:
+            raise StudyFileError(f"{where}: clip {clip} is a ball clip: it holds the position only, vary "
+                                 f"clips[{clip}].point")
     if item.distribution not in DISTRIBUTIONS[kind]:
         raise StudyFileError(f"{where}: distribution = \"{item.distribution}\" does not apply; choose one of "
                              f"{', '.join(DISTRIBUTIONS[kind])}")
@@ -248,10 +262,10 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
             size = (_scalar(value, needed),)
         if item.unit == "%":
             size = tuple(v * base.problem.hose.length / 100.0 for v in size)
-        if item.parameter == "hose.mass_per_length" and base.problem.hose.mass_per_length == 0.0:
+        if "hose.mass_per_length" in (item.parameter, *item.shared_with) and base.problem.hose.mass_per_length == 0.0:
             raise ValueError("the base hose is weightless (mass_per_length = 0): a factor changes nothing; give its "
                              "mass_per_length in the base file")
-        return Tolerance(item.parameter, item.distribution, size, item.label)
+        return Tolerance(item.parameter, item.distribution, size, item.label, tuple(item.shared_with))
     except ValueError as exc:
         raise StudyFileError(f"{where}: {exc}") from None
 

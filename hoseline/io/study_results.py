@@ -189,8 +189,8 @@ def study_document(outcome: StudyOutcome) -> dict:
         "problem": problem_to_dict(study.base.problem),
         "sampling": {"method": study.sampling.method, "samples": study.sampling.count, "seed": study.sampling.seed,
                      "batch": study.sampling.batch_size()},
-        "tolerances": [{"parameter": t.parameter, "distribution": t.distribution, "size": list(t.size),
-                        "label": t.name} for t in study.variation.tolerances],
+        "tolerances": [{"parameter": t.parameter, "shared_with": list(t.shared_with), "distribution": t.distribution,
+                        "size": list(t.size), "label": t.name} for t in study.variation.tolerances],
         "nominal": dict(zip(names, outcome.nominal)),
         "quantities": {
             q.name: {"unit": q.unit, "mean": s.mean, "std": s.std, **{f"P{p:g}": v for p, v in zip(PERCENTILES, s.percentiles)},

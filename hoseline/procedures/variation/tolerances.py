@@ -22,8 +22,11 @@ and, after them, five per clip of the problem (coordinate_names(clips)), in the 
 A Tolerance maps its own dimensions of a point u of the unit hypercube onto some coordinates
 by the inverse distribution function, so one code serves Monte Carlo and space-filling designs
 alike; several tolerances on one parameter add up (a length tolerance and the change under
-pressure).  Each also knows the mean and covariance of what it adds, for the first-order
-variance (sensitivity.py).
+pressure).  A tolerance shared with other parameters of its kind (`shared_with`: a shared
+contributor, e.g. the subframe both mounts sit on) adds the same deviation to each of them, so
+they move together: their deviations are correlated, and Variation.covariance has the cross
+terms.  Each also knows the mean and covariance of what it adds, for the first-order variance
+(sensitivity.py).
 """
 
 from __future__ import annotations
@@ -122,12 +125,17 @@ class Tolerance:
     factor in [low, high].  sphere: uniform in a ball of the radius.  cone: the direction
     uniform over the spherical cap of the half angle.  lognormal: 95 % of the factors within
     [1/factor, factor].  loguniform: ln(factor) uniform within +-ln(factor).
+
+    shared_with: other parameters of the same kind and unit that the same deviation moves (a
+    shared contributor: e.g. "end.point" and "clips[0].point" with "start.point" for a subframe
+    carrying all three; "hose.mass_per_length" with "hose.bending_stiffness" for a hose batch).
     """
 
     parameter: str
     distribution: str
     size: tuple[float, ...]
     label: str = ""
+    shared_with: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         kind = self.kind  # raises for an unknown parameter
@@ -154,6 +162,28 @@ class Tolerance:
             raise ValueError(f"{self.parameter}: {self.distribution} {given}: each must be zero or positive, and not "
                              "all zero (a tolerance of zero everywhere varies nothing: remove the entry)")
         object.__setattr__(self, "size", size)
+        shared = tuple(self.shared_with)
+        if len(set(shared) | {self.parameter}) != len(shared) + 1:
+            raise ValueError(f"{self.parameter}: shared_with = {list(shared)} lists a parameter twice, or the parameter "
+                             "itself")
+        units = _units(self.parameter)
+        for other in shared:
+            other_kind = parameter_kind(other)[0]  # raises for an unknown parameter
+            if other_kind != kind or _units(other) != units:
+                raise ValueError(f"{self.parameter}: shared_with {other}: a shared deviation moves parameters of one "
+                                 f"kind and unit ({kind}, {', '.join(sorted(set(units)))}), {other} is "
+                                 f"{other_kind} in {', '.join(sorted(set(_units(other))))}")
+        object.__setattr__(self, "shared_with", shared)
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The parameter and those it is shared with."""
+        return (self.parameter, *self.shared_with)
+
+    @property
+    def targets(self) -> tuple[tuple[int, ...], ...]:
+        """Per parameter moved (parameters), the indexes into coordinate_names(clips) its deviation adds to."""
+        return tuple(parameter_kind(parameter)[1] for parameter in self.parameters)
 
     @property
     def kind(self) -> str:
@@ -173,7 +203,7 @@ class Tolerance:
     @property
     def name(self) -> str:
         """The label, or parameter and distribution."""
-        return self.label or f"{self.parameter} ({self.distribution})"
+        return self.label or f"{' + '.join(self.parameters)} ({self.distribution}{', shared' if self.shared_with else ''})"
 
     def values(self, unit: np.ndarray) -> np.ndarray:
         """(n, len(coordinates)) coordinate values of (n, dimensions) unit points in (0, 1)."""
@@ -236,6 +266,13 @@ class Tolerance:
         return np.array([[math.log(size[0]) ** 2 / 3.0]])  # loguniform
 
 
+def _units(parameter: str) -> tuple[str, ...]:
+    """The units of the coordinates a parameter moves."""
+    clip = clip_index(parameter)
+    units = coordinate_units(0 if clip is None else clip + 1)
+    return tuple(units[k] for k in parameter_kind(parameter)[1])
+
+
 def _integral_log_squared(x: float) -> float:
     """An antiderivative of ln(x)^2: x (ln^2 x - 2 ln x + 2)."""
     log = math.log(x)
@@ -254,9 +291,10 @@ class Variation:
 
     def __post_init__(self) -> None:
         for tolerance in self.tolerances:
-            k = clip_index(tolerance.parameter)
-            if k is not None and k >= self.clips:
-                raise ValueError(f"{tolerance.parameter}: the problem has {self.clips} clip(s), numbered from 0")
+            for parameter in tolerance.parameters:
+                k = clip_index(parameter)
+                if k is not None and k >= self.clips:
+                    raise ValueError(f"{parameter}: the problem has {self.clips} clip(s), numbered from 0")
 
     @property
     def width(self) -> int:
@@ -281,7 +319,7 @@ class Variation:
     @property
     def varied(self) -> tuple[int, ...]:
         """Indexes of the canonical coordinates some tolerance moves, in COORDINATES order."""
-        return tuple(sorted({k for t in self.tolerances for k in t.coordinates}))
+        return tuple(sorted({k for t in self.tolerances for target in t.targets for k in target}))
 
     def coordinates(self, unit: np.ndarray) -> np.ndarray:
         """(n, width) deviations of the hoses at unit points (n, dimensions)."""
@@ -289,8 +327,9 @@ class Variation:
         out = np.zeros((unit.shape[0], self.width))
         column = 0
         for tolerance in self.tolerances:
-            values = tolerance.values(unit[:, column:column + tolerance.dimensions])
-            out[:, list(tolerance.coordinates)] += values.reshape(unit.shape[0], -1)
+            values = tolerance.values(unit[:, column:column + tolerance.dimensions]).reshape(unit.shape[0], -1)
+            for target in tolerance.targets:
+                out[:, list(target)] += values
             column += tolerance.dimensions
         return out
 
@@ -298,15 +337,19 @@ class Variation:
         """(width,) mean deviation."""
         out = np.zeros(self.width)
         for tolerance in self.tolerances:
-            out[list(tolerance.coordinates)] += tolerance.mean()
+            for target in tolerance.targets:
+                out[list(target)] += tolerance.mean()
         return out
 
     def covariance(self) -> np.ndarray:
-        """(width, width) covariance of the deviations (tolerances independent)."""
+        """(width, width) covariance of the deviations (tolerances independent of each other; a shared one gives the
+        same block between every two parameters it moves)."""
         out = np.zeros((self.width, self.width))
         for tolerance in self.tolerances:
-            index = np.array(tolerance.coordinates)
-            out[np.ix_(index, index)] += tolerance.covariance()
+            covariance = tolerance.covariance()
+            for first in tolerance.targets:
+                for second in tolerance.targets:
+                    out[np.ix_(first, second)] += covariance
         return out
 
 
