@@ -204,6 +204,10 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
      'vary[0].shared_with[0] = "start.pont": unknown'),
     ("sigma = [0.5, 0.5, 1.0]", 'sigma = [0.5, 0.5, 1.0]\nshared_with = ["hose.length"]',
      "vary[0] (end.point): end.point: shared_with hose.length: a shared deviation moves parameters of one kind"),
+    ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "triangular"\nrange = [-4.0, 2.0]',
+     "vary[1] (hose.length): a triangular distribution takes range and mode only: give mode"),
+    ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "truncnormal"\nrange = [-4.0, 2.0]\nmode = 1.0',
+     "a truncnormal distribution takes sigma and range (and optionally mean) only: remove mode; give sigma"),
     ("bend_radius = 36.0", "bendradius = 36.0", "limits.bendradius: unknown quantity"),
 ])
 def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):
@@ -215,6 +219,24 @@ def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, messag
     assert result.exit_code == 2
     assert message in result.output.replace("\n", " ")
     assert not (tmp_path / "out").exists()
+
+
+def test_triangular_and_truncated_normal_offsets_are_read_in_mm_or_percent(tmp_path):
+    """The offset distributions' keys become the Tolerance's size (low, mode, high) and (mean, sigma, low, high),
+    a percentage of the base length converted to mm throughout."""
+    from hoseline.io.study_file import load_study
+
+    text = PLACEMENT_STUDY.replace('distribution = "uniform"\nrange = [-4.0, 2.0]',
+                                   'distribution = "triangular"\nrange = [-4.0, 2.0]\nmode = -1.0')
+    text += '[[vary]]\nparameter = "end.twist"\ndistribution = "truncnormal"\nmean = 0.5\nsigma = 2.0\nrange = [-3.0, 5.0]\n'
+    (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
+    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    study, _, _ = load_study(tmp_path / "study.toml")
+    length = study.base.problem.hose.length
+    triangle, cut = study.variation.tolerances[1], study.variation.tolerances[3]
+    assert triangle.distribution == "triangular" and triangle.size == pytest.approx((-0.04 * length, -0.01 * length,
+                                                                                     0.02 * length))
+    assert cut.distribution == "truncnormal" and cut.size == (0.5, 2.0, -3.0, 5.0)
 
 
 def test_a_missing_base_file_is_named(tmp_path):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from statistics import NormalDist
 
 import numpy as np
 import pytest
@@ -25,6 +26,9 @@ CASES = [
     Tolerance("hose.torsion_factor", "loguniform", (1.5,)),
     Tolerance("hose.mass_per_length", "uniform", (0.8, 1.3)),
     Tolerance("end.twist", "uniform", (-5.0, 1.0)),
+    Tolerance("hose.length", "triangular", (-6.0, -4.0, 2.0)),
+    Tolerance("end.twist", "triangular", (0.0, 0.0, 3.0)),
+    Tolerance("hose.length", "truncnormal", (-1.0, 2.0, -3.0, 4.0)),  # a process offset of -1 mm, cut asymmetrically
 ]
 
 
@@ -50,6 +54,13 @@ def test_distributions_keep_their_bounds():
     assert np.max(np.linalg.norm(Tolerance("end.direction", "cone", (4.0,)).values(unit[:, :2]), axis=1)) <= 4.0
     length = Tolerance("hose.length", "uniform", (-4.0, 2.0)).values(unit[:, :1])
     assert length.min() >= -4.0 and length.max() <= 2.0
+    triangle = Tolerance("hose.length", "triangular", (-6.0, -4.0, 2.0)).values(unit[:, :1])
+    assert triangle.min() >= -6.0 and triangle.max() <= 2.0
+    assert np.mean(triangle < -4.0) == pytest.approx(2.0 / 8.0, abs=0.01)  # the mode's quantile: (mode-low)/(high-low)
+    cut = Tolerance("hose.length", "truncnormal", (-1.0, 2.0, -3.0, 4.0)).values(unit[:, :1])
+    normal = NormalDist()  # the median in closed form: mean + sigma Phi^-1((Phi(alpha) + Phi(beta)) / 2)
+    median = -1.0 + 2.0 * normal.inv_cdf(0.5 * (normal.cdf(-1.0) + normal.cdf(2.5)))
+    assert cut.min() >= -3.0 and cut.max() <= 4.0 and np.median(cut) == pytest.approx(median, abs=0.02)
     factor = np.exp(Tolerance("hose.bending_stiffness", "lognormal", (2.0,)).values(unit[:, :1]))
     inside = np.mean((factor > 0.5) & (factor < 2.0))
     assert abs(inside - 0.95) < 0.005  # measured 0.9498
@@ -101,6 +112,10 @@ def test_bad_tolerances_are_refused_with_the_fix():
         Tolerance("end.point", "uniform", (1.0, -1.0, 0.0))
     with pytest.raises(ValueError, match="not all zero"):
         Tolerance("clips[0].point", "uniform", (0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="need low <= mode <= high"):
+        Tolerance("hose.length", "triangular", (-1.0, 2.0, 1.0))
+    with pytest.raises(ValueError, match="need sigma > 0 and low < high"):
+        Tolerance("hose.length", "truncnormal", (0.0, 1.0, 2.0, -2.0))
     with pytest.raises(ValueError, match="radius = -1"):
         Tolerance("start.point", "sphere", (-1.0,))
 

@@ -34,9 +34,9 @@
     distribution = "lognormal"         #   lognormal (factor: 95 % within [1/f, f]), loguniform (factor),
     factor = 2.0                       #   uniform (range = [low, high] of the factor)
     [[vary]]
-    parameter = "end.twist"            # degrees: normal (sigma), uniform (range)
-    distribution = "normal"
-    sigma = 3.0
+    parameter = "end.twist"            # degrees: normal (sigma), uniform (range); offsets (length, twist)
+    distribution = "normal"            #   also triangular (range and mode) and truncnormal (sigma, range and
+    sigma = 3.0                        #   optionally mean: a process offset), as for hose.length
     [[vary]]
     parameter = "start.point"          # a shared contributor: the same deviation moves every parameter listed
     shared_with = ["end.point"]        #   (same kind and unit), e.g. the subframe both mounts sit on
@@ -83,6 +83,7 @@ from hoseline.procedures.variation.tolerances import (DISTRIBUTIONS, PARAMETERS,
 
 MAX_SAMPLES = 10_000_000  # beyond this the stored samples would not fit in memory
 MAX_CANDIDATES = 100_000
+SIZE_KEYS = ("sigma", "tolerance", "radius", "angle", "range", "factor", "mode", "mean")  # of [[vary]]
 
 
 class StudyFileError(ProblemFileError):
@@ -126,6 +127,8 @@ class VarySection(_Section):
     angle: float | None = None
     range: list[float] | None = None
     factor: float | None = None
+    mode: float | None = None
+    mean: float | None = None
     unit: Literal["mm", "%"] = "mm"
     label: str = ""
     shared_with: list[str] = Field(default_factory=list)
@@ -238,28 +241,38 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
     if item.distribution not in DISTRIBUTIONS[kind]:
         raise StudyFileError(f"{where}: distribution = \"{item.distribution}\" does not apply; choose one of "
                              f"{', '.join(DISTRIBUTIONS[kind])}")
-    keys = {"normal": "sigma", "uniform": "tolerance" if kind == "point" else "range", "sphere": "radius",
-            "cone": "angle", "lognormal": "factor", "loguniform": "factor"}
-    needed = keys[item.distribution]
-    given = [key for key in ("sigma", "tolerance", "radius", "angle", "range", "factor") if getattr(item, key) is not None]
-    if given != [needed]:
-        extra = [key for key in given if key != needed]
-        fix = f"remove {', '.join(extra)}" if extra else f"give {needed}"
-        raise StudyFileError(f"{where}: a {item.distribution} distribution takes {needed} only: {fix}")
+    needed = {"normal": ("sigma",), "uniform": ("tolerance",) if kind == "point" else ("range",), "sphere": ("radius",),
+              "cone": ("angle",), "lognormal": ("factor",), "loguniform": ("factor",), "triangular": ("range", "mode"),
+              "truncnormal": ("sigma", "range")}[item.distribution]
+    optional = ("mean",) if item.distribution == "truncnormal" else ()
+    given = [key for key in SIZE_KEYS if getattr(item, key) is not None]
+    missing = [key for key in needed if key not in given]
+    extra = [key for key in given if key not in needed + optional]
+    if missing or extra:
+        fix = "; ".join(part for part in (f"remove {', '.join(extra)}" if extra else "",
+                                          f"give {', '.join(missing)}" if missing else "") if part)
+        also = f" (and optionally {', '.join(optional)})" if optional else ""
+        raise StudyFileError(f"{where}: a {item.distribution} distribution takes {' and '.join(needed)}{also} only: {fix}")
     if item.unit == "%" and item.parameter != "hose.length":
         raise StudyFileError(f"{where}: unit = \"%\" applies to hose.length only: remove it")
-    value = getattr(item, needed)
     try:
-        if kind == "point" and needed in ("sigma", "tolerance"):
+        if kind == "point" and needed[0] in ("sigma", "tolerance"):
+            value = getattr(item, needed[0])
             size = tuple(value) if isinstance(value, list) else (float(value),) * 3
             if len(size) != 3:
-                raise ValueError(f"{needed} must be one number or three [x, y, z]")
-        elif needed == "range":
-            if len(value) != 2:
+                raise ValueError(f"{needed[0]} must be one number or three [x, y, z]")
+        elif "range" in needed:
+            if len(item.range) != 2:
                 raise ValueError("range must be [low, high]")
-            size = tuple(value)
+            low, high = item.range
+            if item.distribution == "triangular":
+                size = (low, _scalar(item.mode, "mode"), high)
+            elif item.distribution == "truncnormal":
+                size = (_scalar(item.mean or 0.0, "mean"), _scalar(item.sigma, "sigma"), low, high)
+            else:
+                size = (low, high)
         else:
-            size = (_scalar(value, needed),)
+            size = (_scalar(getattr(item, needed[0]), needed[0]),)
         if item.unit == "%":
             size = tuple(v * base.problem.hose.length / 100.0 for v in size)
         if "hose.mass_per_length" in (item.parameter, *item.shared_with) and base.problem.hose.mass_per_length == 0.0:

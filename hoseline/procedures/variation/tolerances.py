@@ -104,7 +104,8 @@ DISTRIBUTIONS = {
     "point": {"normal": ("sigma_x", "sigma_y", "sigma_z"), "uniform": ("tolerance_x", "tolerance_y", "tolerance_z"),
               "sphere": ("radius",)},
     "tilt": {"cone": ("angle",), "normal": ("sigma",)},
-    "offset": {"normal": ("sigma",), "uniform": ("low", "high")},
+    "offset": {"normal": ("sigma",), "uniform": ("low", "high"), "triangular": ("low", "mode", "high"),
+               "truncnormal": ("mean", "sigma", "low", "high")},
     "factor": {"lognormal": ("factor",), "loguniform": ("factor",), "uniform": ("low", "high")},
 }
 
@@ -124,7 +125,9 @@ class Tolerance:
     normal: sigma.  uniform: offsets in [low, high], or +-tolerance per axis for a point, or a
     factor in [low, high].  sphere: uniform in a ball of the radius.  cone: the direction
     uniform over the spherical cap of the half angle.  lognormal: 95 % of the factors within
-    [1/factor, factor].  loguniform: ln(factor) uniform within +-ln(factor).
+    [1/factor, factor].  loguniform: ln(factor) uniform within +-ln(factor).  triangular (offsets):
+    the density rising linearly from low to mode and falling to high.  truncnormal (offsets): a normal
+    of the mean (a process offset) and sigma, cut to [low, high].
 
     shared_with: other parameters of the same kind and unit that the same deviation moves (a
     shared contributor: e.g. "end.point" and "clips[0].point" with "start.point" for a subframe
@@ -151,6 +154,14 @@ class Tolerance:
                 raise ValueError(f"{self.parameter}: uniform range [{size[0]:g}, {size[1]:g}] must have low < high")
             if kind == "factor" and size[0] <= 0.0:
                 raise ValueError(f"{self.parameter}: a factor range must stay positive, got low = {size[0]:g}")
+        elif self.distribution == "triangular":
+            if not size[0] <= size[1] <= size[2] or not size[0] < size[2]:
+                raise ValueError(f"{self.parameter}: triangular low = {size[0]:g}, mode = {size[1]:g}, high = "
+                                 f"{size[2]:g}: need low <= mode <= high and low < high")
+        elif self.distribution == "truncnormal":
+            if not size[1] > 0.0 or not size[2] < size[3]:
+                raise ValueError(f"{self.parameter}: truncnormal sigma = {size[1]:g}, range [{size[2]:g}, {size[3]:g}]: "
+                                 "need sigma > 0 and low < high")
         elif self.distribution in ("lognormal", "loguniform"):
             if not size[0] > 1.0:
                 raise ValueError(f"{self.parameter}: factor = {size[0]:g} must be above 1 (e.g. 2 for a factor of two)")
@@ -229,6 +240,13 @@ class Tolerance:
             return angle[:, None] * np.column_stack([np.cos(azimuth), np.sin(azimuth)])
         if self.distribution == "lognormal":
             return math.log(size[0]) / Z95 * ndtri(u)
+        if self.distribution == "triangular":
+            low, mode, high = size
+            rising = u < (mode - low) / (high - low)
+            return np.where(rising, low + np.sqrt(u * (high - low) * (mode - low)),
+                            high - np.sqrt((1.0 - u) * (high - low) * (high - mode)))
+        if self.distribution == "truncnormal":
+            return _truncated(size).ppf(u)
         return math.log(size[0]) * (2.0 * u - 1.0)  # loguniform
 
     def mean(self) -> np.ndarray:
@@ -238,6 +256,10 @@ class Tolerance:
         if self.distribution == "uniform" and self.kind == "factor":
             low, high = self.size
             return np.array([(high * math.log(high) - high - low * math.log(low) + low) / (high - low)])
+        if self.distribution == "triangular":
+            return np.array([sum(self.size) / 3.0])
+        if self.distribution == "truncnormal":
+            return np.array([float(_truncated(self.size).mean())])
         return np.zeros(len(self.coordinates))
 
     def covariance(self) -> np.ndarray:
@@ -263,7 +285,20 @@ class Tolerance:
             return np.eye(2) * math.degrees(1.0) ** 2 * second / 2.0
         if self.distribution == "lognormal":
             return np.array([[(math.log(size[0]) / Z95) ** 2]])
+        if self.distribution == "triangular":
+            low, mode, high = size
+            return np.array([[(low**2 + mode**2 + high**2 - low * mode - low * high - mode * high) / 18.0]])
+        if self.distribution == "truncnormal":
+            return np.array([[float(_truncated(self.size).var())]])
         return np.array([[math.log(size[0]) ** 2 / 3.0]])  # loguniform
+
+
+def _truncated(size: tuple[float, ...]):
+    """scipy.stats' frozen truncated normal of a truncnormal tolerance's size (mean, sigma, low, high)."""
+    from scipy.stats import truncnorm  # here: the workers, which never draw, need not import scipy.stats
+
+    mean, sigma, low, high = size
+    return truncnorm((low - mean) / sigma, (high - mean) / sigma, loc=mean, scale=sigma)
 
 
 def _units(parameter: str) -> tuple[str, ...]:
