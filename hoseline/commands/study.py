@@ -38,12 +38,13 @@ def study_command(
         except ClusterError as exc:
             raise fail(str(exc), BAD_INPUT) from None
     from hoseline.io.study_file import StudyFileError, load_study
-    from hoseline.io.study_results import PartialStore, fingerprint
+
+    study, base_text, base_path = read_input(load_study, study_file, "study file", (StudyFileError,))
+    from hoseline.io.study_results import PartialStore, fingerprint  # after the input is read: a refusal needs none
     from hoseline.procedures.variation.engine import Where
     from hoseline.procedures.variation.run import run_study
     from hoseline.report.study_report import write_study_report
 
-    study, base_text, base_path = read_input(load_study, study_file, "study file", (StudyFileError,))
     text = study_file.read_text(encoding="utf-8")
     key = fingerprint(text, base_text, study)
     with errors_to_exit_codes(out):

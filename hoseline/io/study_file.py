@@ -73,7 +73,6 @@ import numpy as np
 from pydantic import AfterValidator, ConfigDict, Field, model_validator
 
 from hoseline.io.problem_file import ProblemFileError, _Section, _validated, load_problem, read_toml
-from hoseline.io.sweep_file import load_sweep
 from hoseline.procedures.variation.design_search import DesignGrid, default_rank_by
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
 from hoseline.procedures.variation.samples import StudyBase
@@ -201,6 +200,8 @@ def _base(path: Path, source: str, given: str) -> tuple[StudyBase, str]:
         raise StudyFileError(f"{source}: base = \"{given}\": cannot read {path}: {exc.strerror or exc}") from None
     try:
         if "bodies" in read_toml(path, ProblemFileError):
+            from hoseline.io.sweep_file import load_sweep  # here: its meshes' library is for sweeps alone
+
             sweep = load_sweep(path)
             return StudyBase(sweep.problem, sweep), text
         return StudyBase(load_problem(path)), text

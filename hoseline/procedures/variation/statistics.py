@@ -18,7 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import binomtest
 
 from hoseline.procedures.variation.quantities import Limit
 
@@ -51,6 +50,8 @@ def probability(limit: Limit, values: np.ndarray) -> Probability:
     broken = int(np.sum(limit.margin(solved) < 0.0))
     if solved.size == 0:
         return Probability(limit, 0, 0, failed, float("nan"), 0.0, 1.0, 1.0)
+    from scipy.stats import binomtest  # here: scipy.stats takes a second to import, and a refused study file needs none
+
     interval = binomtest(broken, solved.size).proportion_ci(CONFIDENCE, method="exact")
     worst = binomtest(broken + failed, values.size).proportion_ci(CONFIDENCE, method="exact")
     return Probability(limit, broken, int(solved.size), int(failed), broken / solved.size, float(interval.low),
