@@ -200,7 +200,8 @@ def study_document(outcome: StudyOutcome) -> dict:
         "probabilities": [
             {"limit": p.limit.describe(), "quantity": p.limit.quantity.name, "value": p.limit.value,
              "probability": p.estimate, "ci95": [p.low, p.high], "ci95_high_counting_failed": p.high_with_failed,
-             "broken": p.broken, "solved": p.solved, "failed": p.failed, "worst_sample": w}
+             "broken": p.broken, "solved": p.solved, "failed": p.failed, "cpk": p.cpk, "ppm_if_normal": p.ppm,
+             "worst_sample": w}
             for p, w in zip(outcome.probabilities, outcome.worst)
         ],
         "failures": [{"cause": f.cause, "count": f.count, "samples": list(f.samples), "example": f.example}

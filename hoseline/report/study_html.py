@@ -102,7 +102,8 @@ def _intro(outcome: StudyOutcome) -> str:
 
 def _probability_table(outcome: StudyOutcome) -> str:
     rows = ["<table><tr><th>limit</th><th>nominal</th><th>P(broken)</th><th>95 % interval</th>"
-            "<th>upper end if failed samples broke it</th><th>broken / solved</th><th>worst sample</th></tr>"]
+            "<th>upper end if failed samples broke it</th><th>broken / solved</th><th>Cpk</th>"
+            "<th>ppm if normal</th><th>worst sample</th></tr>"]
     names = [q.name for q in outcome.study.quantities]
     for p, worst in zip(outcome.probabilities, outcome.worst):
         nominal = outcome.nominal[names.index(p.limit.quantity.name)]
@@ -110,7 +111,8 @@ def _probability_table(outcome: StudyOutcome) -> str:
         rows.append(f"<tr><td>{html.escape(p.limit.describe())}</td><td class=\"number\">{_format(float(nominal))}</td>"
                     f"<td class=\"number\"><span{status}>{p.estimate:.4g}</span></td>"
                     f"<td class=\"number\">[{p.low:.3g}, {p.high:.3g}]</td><td class=\"number\">{p.high_with_failed:.3g}</td>"
-                    f"<td class=\"number\">{p.broken} / {p.solved}</td><td class=\"number\">{_format(worst)}</td></tr>")
+                    f"<td class=\"number\">{p.broken} / {p.solved}</td><td class=\"number\">{p.cpk:.3g}</td>"
+                    f"<td class=\"number\">{p.ppm:.3g}</td><td class=\"number\">{_format(worst)}</td></tr>")
     rows.append("</table>")
     return "\n".join(rows)
 

@@ -2,7 +2,8 @@
 
 Probabilities are the fraction of solved samples beyond the limit, with the exact
 (Clopper-Pearson) 95 % interval of a binomial proportion; failed samples are counted apart,
-and the interval's upper end if every failed sample broke the limit is given beside it.  For
+and the interval's upper end if every failed sample broke the limit is given beside it, with the
+limit's process capability (Cpk, and the parts per million a normal quantity would put beyond it).  For
 Latin hypercube and Sobol designs the binomial interval is conservative (such designs usually
 estimate better than independent samples).
 
@@ -15,9 +16,11 @@ numbers must not be used.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import ndtr
 
 from hoseline.procedures.variation.quantities import Limit
 
@@ -30,7 +33,14 @@ NEGLIGIBLE = 1e-9  # standard deviations below this fraction of a quantity's nat
 @dataclass(frozen=True)
 class Probability:
     """P(the limit is broken): estimate and 95 % interval over the solved samples, and the interval's
-    upper end counting every failed sample as broken.  broken, solved, failed: sample counts."""
+    upper end counting every failed sample as broken.  broken, solved, failed: sample counts.
+
+    cpk: the process capability of the (one-sided) limit, the mean's margin over three standard
+    deviations of the solved samples (Cp needs two limits of one quantity: none here); ppm: the parts per
+    million beyond the limit a normal quantity of that mean and standard deviation would give,
+    1e6 Phi(-3 cpk) (beside the estimate counted, a check of how far from normal the tail is).  NaN with
+    fewer than two solved samples.
+    """
 
     limit: Limit
     broken: int
@@ -40,6 +50,8 @@ class Probability:
     low: float
     high: float
     high_with_failed: float
+    cpk: float = float("nan")
+    ppm: float = float("nan")
 
 
 def probability(limit: Limit, values: np.ndarray) -> Probability:
@@ -54,8 +66,21 @@ def probability(limit: Limit, values: np.ndarray) -> Probability:
 
     interval = binomtest(broken, solved.size).proportion_ci(CONFIDENCE, method="exact")
     worst = binomtest(broken + failed, values.size).proportion_ci(CONFIDENCE, method="exact")
+    cpk, ppm = capability(limit, solved)
     return Probability(limit, broken, int(solved.size), int(failed), broken / solved.size, float(interval.low),
-                       float(interval.high), float(worst.high))
+                       float(interval.high), float(worst.high), cpk, ppm)
+
+
+def capability(limit: Limit, solved: np.ndarray) -> tuple[float, float]:
+    """(cpk, expected ppm beyond the limit if normal) of the solved values of the limited quantity (Probability)."""
+    if solved.size < 2:
+        return float("nan"), float("nan")
+    sigma = float(np.std(solved, ddof=1))
+    margin = float(limit.margin(np.mean(solved)))
+    if sigma == 0.0:
+        return math.copysign(math.inf, margin), 0.0 if margin >= 0.0 else 1e6
+    cpk = margin / (3.0 * sigma)
+    return cpk, 1e6 * float(ndtr(-3.0 * cpk))
 
 
 @dataclass(frozen=True)
