@@ -193,7 +193,9 @@ def study_document(outcome: StudyOutcome) -> dict:
                         "size": list(t.size), "label": t.name} for t in study.variation.tolerances],
         "nominal": dict(zip(names, outcome.nominal)),
         "quantities": {
-            q.name: {"unit": q.unit, "mean": s.mean, "std": s.std, **{f"P{p:g}": v for p, v in zip(PERCENTILES, s.percentiles)},
+            q.name: {"unit": q.unit, "mean": s.mean, "mean_ci95": list(s.mean_interval), "std": s.std,
+                     **{f"P{p:g}": v for p, v in zip(PERCENTILES, s.percentiles)},
+                     **{f"P{p:g}_ci95": list(i) for p, i in zip(PERCENTILES, s.percentile_intervals)},
                      "min": s.minimum, "max": s.maximum, "solved": s.solved}
             for q, s in zip(study.quantities, outcome.spreads)
         },

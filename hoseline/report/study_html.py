@@ -118,14 +118,24 @@ def _probability_table(outcome: StudyOutcome) -> str:
 
 
 def _spread_table(outcome: StudyOutcome) -> str:
-    rows = ["<table><tr><th>quantity</th><th>nominal</th><th>mean</th><th>std</th><th>P5</th><th>P50</th><th>P95</th>"
+    rows = ["<p>Each estimate with its 95 % confidence interval below it (the mean's by Student's t, the "
+            "percentiles' by order statistics, distribution-free).</p>"
+            "<table><tr><th>quantity</th><th>nominal</th><th>mean</th><th>std</th><th>P5</th><th>P50</th><th>P95</th>"
             "<th>min</th><th>max</th></tr>"]
     for q, s, nominal in zip(outcome.study.quantities, outcome.spreads, outcome.nominal):
-        cells = [float(nominal), s.mean, s.std, *s.percentiles, s.minimum, s.maximum]
+        cells = [_format(float(nominal)), _with_interval(s.mean, s.mean_interval), _format(s.std),
+                 *(_with_interval(v, i) for v, i in zip(s.percentiles, s.percentile_intervals)),
+                 _format(s.minimum), _format(s.maximum)]
         rows.append(f"<tr><td>{html.escape(q.name)} [{html.escape(q.unit)}]</td>"
-                    + "".join(f'<td class="number">{_format(float(v))}</td>' for v in cells) + "</tr>")
+                    + "".join(f'<td class="number">{cell}</td>' for cell in cells) + "</tr>")
     rows.append("</table>")
     return "\n".join(rows)
+
+
+def _with_interval(value: float, interval: tuple[float, float]) -> str:
+    """A value with its confidence interval on the line below."""
+    low, high = interval
+    return f"{_format(float(value))}<br><small>[{_format(float(low))}, {_format(float(high))}]</small>"
 
 
 def _first_order_table(outcome: StudyOutcome) -> str:

@@ -86,7 +86,10 @@ def capability(limit: Limit, solved: np.ndarray) -> tuple[float, float]:
 @dataclass(frozen=True)
 class Spread:
     """The distribution of one quantity over the solved samples: mean, standard deviation, variance
-    and its standard error, the PERCENTILES, the extremes, and how many samples were solved."""
+    and its standard error, the PERCENTILES, the extremes, and how many samples were solved; with the
+    95 % confidence interval of the mean (Student's t) and of each percentile (distribution-free: the
+    order statistics whose ranks bound the binomial count of samples below it; -inf or inf where too
+    few samples lie beyond it to bound it)."""
 
     mean: float
     std: float
@@ -96,6 +99,8 @@ class Spread:
     minimum: float
     maximum: float
     solved: int
+    mean_interval: tuple[float, float] = (float("nan"), float("nan"))
+    percentile_intervals: tuple[tuple[float, float], ...] = ()
 
 
 def spread(values: np.ndarray) -> Spread:
@@ -105,12 +110,24 @@ def spread(values: np.ndarray) -> Spread:
     n = x.size
     if n < 4:
         nan = float("nan")
-        return Spread(nan, nan, nan, nan, (nan,) * len(PERCENTILES), nan, nan, n)
+        return Spread(nan, nan, nan, nan, (nan,) * len(PERCENTILES), nan, nan, n, (nan, nan), ((nan, nan),) * len(PERCENTILES))
+    from scipy.stats import binom, t  # here: scipy.stats takes a second to import, and a refused study file needs none
+
     variance = float(np.var(x, ddof=1))
     m4 = float(np.mean((x - x.mean()) ** 4))
     error = float(np.sqrt(max(m4 - variance**2 * (n - 3) / (n - 1), 0.0) / n))
+    half = float(t.ppf(0.5 + CONFIDENCE / 2.0, n - 1) * np.sqrt(variance / n))
+    ordered = np.sort(x)
+    intervals = []
+    for p in PERCENTILES:
+        # ranks l, u (from 1) with P(l <= B <= u - 1) >= CONFIDENCE, B ~ Binomial(n, p) the samples below the percentile
+        low = int(binom.ppf((1.0 - CONFIDENCE) / 2.0, n, p / 100.0))
+        high = int(binom.ppf(0.5 + CONFIDENCE / 2.0, n, p / 100.0)) + 1
+        intervals.append((float(ordered[low - 1]) if low >= 1 else -math.inf,
+                          float(ordered[high - 1]) if high <= n else math.inf))
     return Spread(float(x.mean()), float(np.sqrt(variance)), variance, error,
-                  tuple(float(v) for v in np.percentile(x, PERCENTILES)), float(x.min()), float(x.max()), n)
+                  tuple(float(v) for v in np.percentile(x, PERCENTILES)), float(x.min()), float(x.max()), n,
+                  (float(x.mean()) - half, float(x.mean()) + half), tuple(intervals))
 
 
 @dataclass(frozen=True)
