@@ -208,6 +208,8 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
      "vary[1] (hose.length): a triangular distribution takes range and mode only: give mode"),
     ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "truncnormal"\nrange = [-4.0, 2.0]\nmode = 1.0',
      "a truncnormal distribution takes sigma and range (and optionally mean) only: remove mode; give sigma"),
+    ('distribution = "loguniform"', 'distribution = "loguniform"\nframe = "fitting"',
+     'vary[2] (hose.bending_stiffness): frame = "fitting" applies to points'),
     ("bend_radius = 36.0", "bendradius = 36.0", "limits.bendradius: unknown quantity"),
 ])
 def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):
@@ -237,6 +239,18 @@ def test_triangular_and_truncated_normal_offsets_are_read_in_mm_or_percent(tmp_p
     assert triangle.distribution == "triangular" and triangle.size == pytest.approx((-0.04 * length, -0.01 * length,
                                                                                      0.02 * length))
     assert cut.distribution == "truncnormal" and cut.size == (0.5, 2.0, -3.0, 5.0)
+
+
+def test_a_point_tolerance_in_the_fittings_frame_takes_the_base_fittings_axes(tmp_path):
+    from hoseline.io.study_file import load_study
+    from hoseline.procedures.variation.tolerances import fitting_axes
+
+    text = PLACEMENT_STUDY.replace("sigma = [0.5, 0.5, 1.0]", 'sigma = [0.5, 0.5, 1.0]\nframe = "fitting"')
+    (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
+    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    study, _, _ = load_study(tmp_path / "study.toml")
+    point = study.variation.tolerances[0]
+    assert point.axes == fitting_axes(study.base.problem.end.direction) and point.size == (0.5, 0.5, 1.0)
 
 
 def test_a_missing_base_file_is_named(tmp_path):

@@ -10,7 +10,8 @@ import pytest
 
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.procedures.variation.designs import unit_design
-from hoseline.procedures.variation.tolerances import COORDINATES, INDEX, Tolerance, Variation, perturbed, tilt_axes
+from hoseline.procedures.variation.tolerances import (COORDINATES, INDEX, Tolerance, Variation, fitting_axes, perturbed,
+                                                      tilt_axes)
 
 DRAWS = 200_000
 
@@ -165,3 +166,19 @@ def test_a_shared_contributor_of_another_kind_or_unit_is_refused():
         Tolerance("end.point", "sphere", (1.0,), shared_with=("end.pint",))
     with pytest.raises(ValueError, match=r"clips\[0\].point: the problem has 0 clip"):
         Variation((Tolerance("end.point", "sphere", (1.0,), shared_with=("clips[0].point",)),))
+
+
+def test_a_point_tolerance_in_the_fittings_frame_is_radial_and_axial():
+    """sigma = [0.2, 0.2, 1.0] along a fitting's radial axes and its axis d: the world covariance is
+    0.04 (I - d d^T) + 1.0 d d^T in closed form, and 2^16 draws move the point by 1.0 along d and 0.2 across."""
+    direction = np.array([1.0, 2.0, -2.0]) / 3.0
+    tolerance = Tolerance("end.point", "normal", (0.2, 0.2, 1.0), axes=fitting_axes(direction))
+    along = np.outer(direction, direction)
+    assert np.allclose(tolerance.covariance(), 0.04 * (np.eye(3) - along) + along, atol=1e-12)
+    draws = tolerance.values(unit_design("sobol", 2**16, 3, 2))
+    axial = draws @ direction
+    radial = draws - axial[:, None] * direction
+    assert np.std(axial) == pytest.approx(1.0, rel=0.01)
+    assert np.sqrt(np.mean(np.sum(radial**2, axis=1)) / 2.0) == pytest.approx(0.2, rel=0.01)
+    with pytest.raises(ValueError, match="only for a point"):
+        Tolerance("hose.length", "normal", (1.0,), axes=fitting_axes(direction))

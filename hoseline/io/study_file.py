@@ -14,7 +14,8 @@
     [[vary]]                           # one per tolerance; several on one parameter add up
     parameter = "end.point"            # start.point, end.point: mm
     distribution = "sphere"            #   normal (sigma), uniform (tolerance: +-mm), sphere (radius)
-    radius = 1.0                       #   sigma and tolerance: one number or one per axis [x, y, z]
+    radius = 1.0                       #   sigma and tolerance: one number or one per axis [x, y, z], or with
+                                       #   frame = "fitting" along the fitting's radial axes a, b and its axis
     [[vary]]
     parameter = "end.direction"        # start.direction, end.direction: degrees of cone
     distribution = "cone"              #   cone (angle: uniform within it), normal (sigma per axis)
@@ -78,7 +79,7 @@ from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantitie
 from hoseline.procedures.variation.samples import StudyBase
 from hoseline.procedures.variation.study import Sampling, Study
 from hoseline.procedures.variation.tolerances import (DISTRIBUTIONS, PARAMETERS, Tolerance, Variation, clip_index,
-                                                      parameter_kind)
+                                                      fitting_axes, parameter_kind)
 
 MAX_SAMPLES = 10_000_000  # beyond this the stored samples would not fit in memory
 MAX_CANDIDATES = 100_000
@@ -131,6 +132,7 @@ class VarySection(_Section):
     unit: Literal["mm", "%"] = "mm"
     label: str = ""
     shared_with: list[str] = Field(default_factory=list)
+    frame: Literal["world", "fitting"] = "world"
 
 
 class DesignSection(_Section):
@@ -254,6 +256,18 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
                                           f"give {', '.join(missing)}" if missing else "") if part)
         also = f" (and optionally {', '.join(optional)})" if optional else ""
         raise StudyFileError(f"{where}: a {item.distribution} distribution takes {' and '.join(needed)}{also} only: {fix}")
+    axes = ()
+    if item.frame == "fitting":
+        if kind != "point":
+            raise StudyFileError(f"{where}: frame = \"fitting\" applies to points (start.point, end.point, "
+                                 "clips[k].point): remove it")
+        clip = clip_index(item.parameter)
+        direction = {"start.point": base.problem.start.direction, "end.point": base.problem.end.direction}.get(
+            item.parameter, None if clip is None else clips[clip].direction)
+        if direction is None:
+            raise StudyFileError(f"{where}: frame = \"fitting\": clip {clip} is a ball clip, it has no axis: use "
+                                 "frame = \"world\"")
+        axes = fitting_axes(direction)
     if item.unit == "%" and item.parameter != "hose.length":
         raise StudyFileError(f"{where}: unit = \"%\" applies to hose.length only: remove it")
     try:
@@ -279,7 +293,7 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
         if "hose.mass_per_length" in (item.parameter, *item.shared_with) and base.problem.hose.mass_per_length == 0.0:
             raise ValueError("the base hose is weightless (mass_per_length = 0): a factor changes nothing; give its "
                              "mass_per_length in the base file")
-        return Tolerance(item.parameter, item.distribution, size, item.label, tuple(item.shared_with))
+        return Tolerance(item.parameter, item.distribution, size, item.label, tuple(item.shared_with), axes)
     except ValueError as exc:
         raise StudyFileError(f"{where}: {exc}") from None
 

@@ -190,7 +190,8 @@ def study_document(outcome: StudyOutcome) -> dict:
         "sampling": {"method": study.sampling.method, "samples": study.sampling.count, "seed": study.sampling.seed,
                      "batch": study.sampling.batch_size()},
         "tolerances": [{"parameter": t.parameter, "shared_with": list(t.shared_with), "distribution": t.distribution,
-                        "size": list(t.size), "label": t.name} for t in study.variation.tolerances],
+                        "size": list(t.size), "axes": [list(row) for row in t.axes] or "world", "label": t.name}
+                       for t in study.variation.tolerances],
         "nominal": dict(zip(names, outcome.nominal)),
         "quantities": {
             q.name: {"unit": q.unit, "mean": s.mean, "mean_ci95": list(s.mean_interval), "std": s.std,

@@ -132,6 +132,8 @@ class Tolerance:
     shared_with: other parameters of the same kind and unit that the same deviation moves (a
     shared contributor: e.g. "end.point" and "clips[0].point" with "start.point" for a subframe
     carrying all three; "hose.mass_per_length" with "hose.bending_stiffness" for a hose batch).
+    axes: for a point, the world directions (3 orthonormal rows) of the axes its sizes are given along
+    (fitting_axes: a fitting's two radial axes and its axis); empty: the world axes x, y, z.
     """
 
     parameter: str
@@ -139,6 +141,7 @@ class Tolerance:
     size: tuple[float, ...]
     label: str = ""
     shared_with: tuple[str, ...] = ()
+    axes: tuple[tuple[float, ...], ...] = ()
 
     def __post_init__(self) -> None:
         kind = self.kind  # raises for an unknown parameter
@@ -185,6 +188,12 @@ class Tolerance:
                                  f"kind and unit ({kind}, {', '.join(sorted(set(units)))}), {other} is "
                                  f"{other_kind} in {', '.join(sorted(set(_units(other))))}")
         object.__setattr__(self, "shared_with", shared)
+        axes = tuple(tuple(float(v) for v in row) for row in self.axes)
+        if axes:
+            matrix = np.array(axes)
+            if kind != "point" or matrix.shape != (3, 3) or not np.allclose(matrix @ matrix.T, np.eye(3), atol=1e-9):
+                raise ValueError(f"{self.parameter}: axes must be three orthonormal rows, and only for a point")
+        object.__setattr__(self, "axes", axes)
 
     @property
     def parameters(self) -> tuple[str, ...]:
@@ -217,7 +226,25 @@ class Tolerance:
         return self.label or f"{' + '.join(self.parameters)} ({self.distribution}{', shared' if self.shared_with else ''})"
 
     def values(self, unit: np.ndarray) -> np.ndarray:
-        """(n, len(coordinates)) coordinate values of (n, dimensions) unit points in (0, 1)."""
+        """(n, len(coordinates)) coordinate values of (n, dimensions) unit points in (0, 1) (in the world axes)."""
+        values = self._along_axes(unit)
+        return values @ np.array(self.axes) if self.axes else values
+
+    def mean(self) -> np.ndarray:
+        """(len(coordinates),) mean of what it adds (in the world axes)."""
+        mean = self._mean_along_axes()
+        return mean @ np.array(self.axes) if self.axes else mean
+
+    def covariance(self) -> np.ndarray:
+        """(k, k) covariance of what it adds (k = len(coordinates); in the world axes)."""
+        covariance = self._covariance_along_axes()
+        if not self.axes:
+            return covariance
+        axes = np.array(self.axes)
+        return axes.T @ covariance @ axes
+
+    def _along_axes(self, unit: np.ndarray) -> np.ndarray:
+        """values() along the tolerance's own axes."""
         u = np.clip(np.asarray(unit, dtype=float), _EDGE, 1.0 - _EDGE)
         size = np.array(self.size)
         if self.distribution == "normal":
@@ -249,8 +276,8 @@ class Tolerance:
             return _truncated(size).ppf(u)
         return math.log(size[0]) * (2.0 * u - 1.0)  # loguniform
 
-    def mean(self) -> np.ndarray:
-        """(len(coordinates),) mean of what it adds."""
+    def _mean_along_axes(self) -> np.ndarray:
+        """mean() along the tolerance's own axes."""
         if self.distribution == "uniform" and self.kind == "offset":
             return np.array([0.5 * sum(self.size)])
         if self.distribution == "uniform" and self.kind == "factor":
@@ -262,8 +289,8 @@ class Tolerance:
             return np.array([float(_truncated(self.size).mean())])
         return np.zeros(len(self.coordinates))
 
-    def covariance(self) -> np.ndarray:
-        """(k, k) covariance of what it adds (k = len(coordinates)); the components are uncorrelated."""
+    def _covariance_along_axes(self) -> np.ndarray:
+        """covariance() along the tolerance's own axes: the components are uncorrelated there."""
         size = np.array(self.size)
         k = len(self.coordinates)
         if self.distribution == "normal":
@@ -391,6 +418,14 @@ class Variation:
 def tilt_axes(direction: np.ndarray) -> np.ndarray:
     """(2, 3) the axes a, b a fitting direction is tilted about (unit, perpendicular to it and each other)."""
     return frame_from_tangent(direction)[:2]
+
+
+def fitting_axes(direction: np.ndarray) -> tuple[tuple[float, ...], ...]:
+    """The axes of a point tolerance in a fitting's frame: its two radial axes a, b (tilt_axes) and its axis (the
+    unit direction), as Tolerance.axes rows."""
+    direction = np.asarray(direction, dtype=float)
+    rows = np.vstack([tilt_axes(direction), direction / np.linalg.norm(direction)])
+    return tuple(tuple(float(v) for v in row) for row in rows)
 
 
 def _tilted(mount: Mount, offset: np.ndarray, tilt_deg: np.ndarray) -> Mount:
