@@ -1,6 +1,11 @@
 """Benchmark: variation studies on Dask (LocalCluster on this machine).
 
-    python bench/bench_study.py [--placements 10000] [--sweeps 1000] [--scaling 1000] [--repeats 3]
+    python bench/bench_study.py [--command 10000] [--placements 10000] [--sweeps 1000] [--scaling 1000] [--repeats 3]
+
+0. --command samples of the thesis hose placement as an engineer runs them: the whole `hoseline study`
+   command (start-up, nominal hose and sensitivities, the LocalCluster of 2 workers started and
+   warmed meanwhile, the samples, the report and files written), its wall time, its stages (from
+   summary.json), and the CPU time of the command and all its processes per sample.  Target: 60 s.
 
 1. --placements Monte Carlo samples of the thesis hose placement (100 segments, to its 180 degrees
    of twist), 2 workers, each sample placed from the straight hose (start "straight") and then by
@@ -23,9 +28,13 @@ the wall time does), with the wall time it projects for two idle cores.
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import resource
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -37,7 +46,10 @@ from hoseline.procedures.variation.designs import unit_design  # noqa: E402
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size  # noqa: E402
 from hoseline.procedures.variation.samples import StudyBase, nominal_context  # noqa: E402
 from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities  # noqa: E402
+from hoseline.io.problem_file import problem_to_toml  # noqa: E402
 from hoseline.procedures.variation.tolerances import Tolerance, Variation  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
 
 TOLERANCES = Variation((
     Tolerance("end.point", "sphere", (1.0,)),
@@ -68,6 +80,65 @@ def timed(base: StudyBase, count: int, workers: int, warm: bool = False) -> tupl
     return batches, time.perf_counter() - started, cpu / count, int(sum(failed))
 
 
+STUDY_FILE = """
+name = "bench"
+base = "problem.toml"
+sensitivities = true
+[sampling]
+method = "monte-carlo"
+samples = {count}
+seed = 1
+[[vary]]
+parameter = "end.point"
+distribution = "sphere"
+radius = 1.0
+[[vary]]
+parameter = "end.direction"
+distribution = "cone"
+angle = 2.0
+[[vary]]
+parameter = "hose.length"
+distribution = "normal"
+sigma = 1.0
+[[vary]]
+parameter = "hose.length"
+distribution = "uniform"
+range = [-4.0, 2.0]
+unit = "%"
+[[vary]]
+parameter = "hose.bending_stiffness"
+distribution = "lognormal"
+factor = 2.0
+[[vary]]
+parameter = "end.twist"
+distribution = "normal"
+sigma = 3.0
+[limits]
+bend_radius = 30.0
+end_torque = 2500.0
+"""  # the TOLERANCES above, as a study file
+
+
+def whole_command(count: int) -> tuple[float, float, dict]:
+    """(wall seconds, CPU seconds of the command and every process it started, summary.json's run figures) of
+    `hoseline study` on `count` samples of the thesis hose to 180 degrees (the default LocalCluster)."""
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        (folder / "problem.toml").write_text(problem_to_toml(demo_problem(180.0)), encoding="utf-8")
+        (folder / "study.toml").write_text(STUDY_FILE.format(count=count), encoding="utf-8")
+        command = [str(Path(sys.executable).with_name("hoseline")), "study", str(folder / "study.toml"), "-o",
+                   str(folder / "out"), "-q"]
+        environment = {**os.environ, "PYTHONPATH": str(ROOT)}
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        tick = time.perf_counter()
+        subprocess.run(command, check=True, env=environment, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        wall = time.perf_counter() - tick
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+        run = json.loads((folder / "out" / "summary.json").read_text(encoding="utf-8"))["run"]
+    return wall, cpu, run
+
+
 def load() -> str:
     one, five, fifteen = os.getloadavg()
     return f"load average {one:.2f} {five:.2f} {fifteen:.2f} on {os.cpu_count()} cores"
@@ -75,6 +146,7 @@ def load() -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--command", type=int, default=10_000)
     parser.add_argument("--placements", type=int, default=10_000)
     parser.add_argument("--sweeps", type=int, default=1000)
     parser.add_argument("--scaling", type=int, default=1000)
@@ -85,6 +157,14 @@ def main() -> None:
     sweep_base = StudyBase(sweep.problem, sweep)
     print(load())
 
+    if options.command:
+        wall, cpu, run = whole_command(options.command)
+        stages = ", ".join(f"{key.removeprefix('seconds, ')} {value:.1f} s" for key, value in run.items()
+                           if key.startswith("seconds, ") and value is not None)
+        print(f"whole command: {options.command} samples in {wall:.1f} s; CPU {1e3 * cpu / options.command:.2f} ms per "
+              f"sample, all processes, start-up and report included (idle 2 cores: {cpu / 2:.1f} s); stages: {stages}; "
+              f"outside the study (start-up, report) {wall - run['seconds, whole study']:.1f} s; target 60 s for 10 000: "
+              f"ratio {wall / (60.0 * options.command / 10_000):.2f}   ({load()})")
     for start, warm in (("straight", False), ("nominal", True)):
         if options.scaling:
             rates = {}

@@ -187,29 +187,70 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
     assert "d clearance:post [mm per unit]" in rows[0] and "first_order" in summary
 
 
-@pytest.mark.parametrize("change, message", [
-    ('parameter = "hose.bending_stiffness"', 'vary[2].parameter'),
-    ('distribution = "sphere"\nradius = 1.0\n', "does not apply"),
-    ('sigma = [0.5, 0.5, 1.0]\nradius = 2.0', "takes sigma only: remove radius"),
-    ('[limits]\nbend_radius = 36.0', "limits.bendradius: unknown quantity"),
+@pytest.mark.parametrize("old, new, message", [
+    ('parameter = "hose.bending_stiffness"', 'parameter = "hose.bending_stiff"', 'vary[2].parameter'),
+    ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "sphere"\nradius = 1.0', "does not apply"),
+    ('distribution = "loguniform"', 'distribution = "weibull"', 'vary[2] (hose.bending_stiffness): distribution = '
+                                                                '"weibull" does not apply'),
+    ("sigma = [0.5, 0.5, 1.0]", "sigma = [0.5, 0.5, 1.0]\nradius = 2.0", "takes sigma only: remove radius"),
+    ('distribution = "normal"\nsigma = [0.5, 0.5, 1.0]', 'distribution = "uniform"\ntolerance = [-0.5, 0.5, 1.0]',
+     "vary[0] (end.point): end.point: uniform tolerance_x = -0.5, tolerance_y = 0.5, tolerance_z = 1: each must be "
+     "zero or positive"),
+    ('distribution = "normal"\nsigma = [0.5, 0.5, 1.0]', 'distribution = "uniform"\ntolerance = 0.0',
+     "vary[0] (end.point): end.point: uniform tolerance_x = 0, tolerance_y = 0, tolerance_z = 0: each must be zero or "
+     "positive, and not all zero"),
+    ("sigma = [0.5, 0.5, 1.0]", "sigma = [0.5, -0.5, 1.0]", "sigma_y = -0.5"),
+    ("sigma = [0.5, 0.5, 1.0]", 'sigma = [0.5, 0.5, 1.0]\nshared_with = ["start.pont"]',
+     'vary[0].shared_with[0] = "start.pont": unknown'),
+    ("sigma = [0.5, 0.5, 1.0]", 'sigma = [0.5, 0.5, 1.0]\nshared_with = ["hose.length"]',
+     "vary[0] (end.point): end.point: shared_with hose.length: a shared deviation moves parameters of one kind"),
+    ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "triangular"\nrange = [-4.0, 2.0]',
+     "vary[1] (hose.length): a triangular distribution takes range and mode only: give mode"),
+    ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "truncnormal"\nrange = [-4.0, 2.0]\nmode = 1.0',
+     "a truncnormal distribution takes sigma and range (and optionally mean) only: remove mode; give sigma"),
+    ('distribution = "loguniform"', 'distribution = "loguniform"\nframe = "fitting"',
+     'vary[2] (hose.bending_stiffness): frame = "fitting" applies to points'),
+    ("bend_radius = 36.0", "bendradius = 36.0", "limits.bendradius: unknown quantity"),
 ])
-def test_bad_study_files_are_refused_naming_the_field(tmp_path, change, message):
+def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):
     """Exit code 2, one line naming the field and the fix, nothing written."""
-    text = PLACEMENT_STUDY
-    if change.startswith("parameter"):
-        text = text.replace('parameter = "hose.bending_stiffness"', 'parameter = "hose.bending_stiff"')
-    elif change.startswith("distribution"):
-        text = text.replace('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "sphere"\nradius = 1.0')
-    elif change.startswith("sigma"):
-        text = text.replace("sigma = [0.5, 0.5, 1.0]", "sigma = [0.5, 0.5, 1.0]\nradius = 2.0")
-    else:
-        text = text.replace("bend_radius = 36.0", "bendradius = 36.0")
+    assert old in PLACEMENT_STUDY
     (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
-    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "study.toml").write_text(PLACEMENT_STUDY.replace(old, new, 1), encoding="utf-8")
     result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"), "--workers", "0")
     assert result.exit_code == 2
     assert message in result.output.replace("\n", " ")
     assert not (tmp_path / "out").exists()
+
+
+def test_triangular_and_truncated_normal_offsets_are_read_in_mm_or_percent(tmp_path):
+    """The offset distributions' keys become the Tolerance's size (low, mode, high) and (mean, sigma, low, high),
+    a percentage of the base length converted to mm throughout."""
+    from hoseline.io.study_file import load_study
+
+    text = PLACEMENT_STUDY.replace('distribution = "uniform"\nrange = [-4.0, 2.0]',
+                                   'distribution = "triangular"\nrange = [-4.0, 2.0]\nmode = -1.0')
+    text += '[[vary]]\nparameter = "end.twist"\ndistribution = "truncnormal"\nmean = 0.5\nsigma = 2.0\nrange = [-3.0, 5.0]\n'
+    (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
+    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    study, _, _ = load_study(tmp_path / "study.toml")
+    length = study.base.problem.hose.length
+    triangle, cut = study.variation.tolerances[1], study.variation.tolerances[3]
+    assert triangle.distribution == "triangular" and triangle.size == pytest.approx((-0.04 * length, -0.01 * length,
+                                                                                     0.02 * length))
+    assert cut.distribution == "truncnormal" and cut.size == (0.5, 2.0, -3.0, 5.0)
+
+
+def test_a_point_tolerance_in_the_fittings_frame_takes_the_base_fittings_axes(tmp_path):
+    from hoseline.io.study_file import load_study
+    from hoseline.procedures.variation.tolerances import fitting_axes
+
+    text = PLACEMENT_STUDY.replace("sigma = [0.5, 0.5, 1.0]", 'sigma = [0.5, 0.5, 1.0]\nframe = "fitting"')
+    (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
+    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    study, _, _ = load_study(tmp_path / "study.toml")
+    point = study.variation.tolerances[0]
+    assert point.axes == fitting_axes(study.base.problem.end.direction) and point.size == (0.5, 0.5, 1.0)
 
 
 def test_a_missing_base_file_is_named(tmp_path):

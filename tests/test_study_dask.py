@@ -23,6 +23,7 @@ from hoseline.procedures.variation.design_search import DesignGrid
 from hoseline.procedures.variation.engine import Where
 from hoseline.procedures.variation.quantities import Limit, quantities
 from hoseline.procedures.variation.run import run_study
+from hoseline.procedures.variation.scheduler import ClusterError
 from hoseline.procedures.variation.samples import StudyBase
 from hoseline.procedures.variation.study import Sampling, Study
 from hoseline.procedures.variation.tolerances import Tolerance, Variation
@@ -133,15 +134,44 @@ def test_separate_scheduler_and_two_workers_give_the_in_process_numbers(tmp_path
                 process.kill()
 
 
-def test_an_unreachable_scheduler_is_bad_input(tmp_path, monkeypatch):
-    """Nothing listens on port 9: exit code 2 with a message, nothing written (waiting 1 s instead of 30)."""
-    monkeypatch.setattr(engine, "CONNECT_SECONDS", 1)
+@pytest.mark.parametrize("scheduler, message", [
+    ("tcp://127.0.0.1:9", "cannot reach the Dask scheduler at tcp://127.0.0.1:9: Connection refused (port 9 of "
+                          "127.0.0.1 checked with a 1 s timeout, before any solving)"),
+    ("nowhere/scheduler.json", "the scheduler file"),
+    ("tcp://127.0.0.1:port", "cannot read the address"),
+])
+def test_an_unreachable_scheduler_is_refused_before_any_solving(tmp_path, monkeypatch, scheduler, message):
+    """Nothing listens on port 9, the scheduler file does not exist, the port is no number: exit code 2 with a
+    message saying so, before the nominal hose is placed (which would fail the test), nothing written."""
+    import hoseline.procedures.variation.run as run
+
+    def no_solving(*args, **kwargs):
+        raise AssertionError("the nominal hose was placed before the scheduler was checked")
+
+    monkeypatch.setattr(run, "nominal_context", no_solving)
     folder = _problem_dir(tmp_path)
     result = CliRunner().invoke(app, ["study", str(folder / "study.toml"), "-o", str(tmp_path / "out"), "-q",
-                                      "--scheduler", "tcp://127.0.0.1:9"])
-    assert result.exit_code == 2
-    assert "cannot start or reach the Dask cluster" in result.output
+                                      "--scheduler", scheduler])
+    assert result.exit_code == 2, result.output
+    assert message in result.output.replace("\n", " ")
+    if scheduler.endswith(".json"):
+        assert f"{os.path.abspath(scheduler)} does not exist" in result.output.replace("\n", "")
     assert not (tmp_path / "out" / "report.html").exists()
+
+
+def test_run_study_checks_the_scheduler_before_any_solving(monkeypatch):
+    """The procedure itself (not only the command) refuses an unreachable scheduler before placing the nominal
+    hose."""
+    import hoseline.procedures.variation.run as run
+
+    def no_solving(*args, **kwargs):
+        raise AssertionError("the nominal hose was placed before the scheduler was checked")
+
+    monkeypatch.setattr(run, "nominal_context", no_solving)
+    study = Study("unreachable", StudyBase(demo_problem(180.0, 10)), Variation((Tolerance("end.twist", "normal", (1.0,)),)),
+                  Sampling(count=4), ())
+    with pytest.raises(ClusterError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+        run_study(study, where=Where("tcp://127.0.0.1:9"))
 
 
 class _Interrupted(Exception):
@@ -212,3 +242,42 @@ def test_failed_samples_are_kept_with_their_reason():
     assert probability.failed == failed.sum() and probability.solved == len(failed) - failed.sum()
     assert probability.estimate == 1.0 and probability.high_with_failed == 1.0
     assert outcome.spreads[0].solved == probability.solved
+    # one cause, however many samples, with their indexes (the lengths differ, the cause does not)
+    (cause,) = outcome.failures
+    assert cause.count == failed.sum() and cause.samples == tuple(np.flatnonzero(failed))
+    assert cause.cause == ("ValueError: hose.length = # mm is not longer than the mount distance # mm: an inextensible "
+                           "hose cannot reach; use a hose longer than # mm")
+    assert cause.example == outcome.samples["reason"][cause.samples[0]]
+
+
+def test_failures_are_grouped_by_cause_and_a_fault_of_the_program_stops_the_study(monkeypatch):
+    """Samples failing with the solver's own errors are grouped by cause (the numbers left out, names such as
+    clips[1] kept); any other exception (here a TypeError, as a programming error would raise) is not recorded as
+    a failed sample but raised."""
+    from hoseline.procedures.placement.continuation import PlacementError
+    from hoseline.procedures.variation import samples
+    from hoseline.procedures.variation.study import failure_causes
+
+    reasons = np.array(["", "PlacementError: phase 'twist' failed at fraction 0.7458: residual 2.29e-06",
+                        "ValueError: clips[1].direction: a ball clip holds no direction to vary",
+                        "PlacementError: phase 'twist' failed at fraction 0.12: residual 3e-7", "",
+                        "ValueError: clips[0].direction: a ball clip holds no direction to vary"])
+    causes = failure_causes(reasons, reasons != "")
+    assert [(c.cause, c.count, c.samples) for c in causes] == [
+        ("PlacementError: phase 'twist' failed at fraction #: residual #", 2, (1, 3)),
+        ("ValueError: clips[1].direction: a ball clip holds no direction to vary", 1, (2,)),
+        ("ValueError: clips[0].direction: a ball clip holds no direction to vary", 1, (5,))]
+
+    context = samples.StudyContext(StudyBase(demo_problem(0.0, 10)), np.zeros((1, 11, 3)))
+    for error, recorded in ((PlacementError("no path"), True), (ValueError("too short"), True),
+                            (TypeError("a bug"), False), (IndexError("a bug"), False)):
+        def read(self, problem, error=error):
+            raise error
+
+        monkeypatch.setattr(samples.StudyBase, "read", read)
+        if recorded:
+            out = samples.evaluate_batch(context, np.arange(2), np.zeros((2, 15)))
+            assert out["failed"].all() and out["reason"][0] == f"{type(error).__name__}: {error}"
+        else:
+            with pytest.raises(type(error), match="a bug"):
+                samples.evaluate_batch(context, np.arange(2), np.zeros((2, 15)))

@@ -133,3 +133,28 @@ def test_tornado_of_a_weightless_hose():
     assert torque[1] > 10.0 * torque[0]
     # the end torque is proportional to EI: d torque / d ln(EI) = torque
     assert sensitivities.derivatives[1, COORDINATES.index("hose.bending")] == pytest.approx(sensitivities.values[1], rel=1e-6)
+
+
+def test_mounts_moved_together_move_the_weightless_hose_rigidly():
+    """A deviation shared by both mounts of a weightless hose is a rigid translation: every sample's shape is the
+    nominal one moved by it (the deviation quantity is its length, and its mean square 3 sigma^2 in closed form),
+    the bend radius, end torque and twist rate do not change, and the first order says the same (a shared
+    contribution of zero where the mounts moved apart would give a spread)."""
+    sigma = 0.5
+    problem = demo_problem(90.0, 30)
+    together = Variation((Tolerance("start.point", "normal", (sigma,) * 3, shared_with=("end.point",)),))
+    study = Study("subframe", StudyBase(problem), together, Sampling("sobol", 32, 4), ())
+    outcome = run_study(study, where=Where(workers=0))
+    values = outcome.samples["values"]
+    names = [q.name for q in study.quantities]
+    moved = np.linalg.norm(outcome.coordinates[:, 0:3], axis=1)
+    assert np.allclose(outcome.coordinates[:, 0:3], outcome.coordinates[:, 5:8])
+    assert np.allclose(values[:, names.index("deviation")], moved, rtol=1e-6, atol=1e-9)
+    assert np.mean(moved**2) == pytest.approx(3.0 * sigma**2, rel=0.15)  # 32 draws
+    for name in ("bend_radius", "end_torque", "twist_rate"):
+        column = values[:, names.index(name)]
+        assert np.ptp(column) <= 1e-6 * abs(outcome.nominal[names.index(name)])
+    sensitivities = placement_sensitivities(problem, together.varied)
+    contributions = sensitivities.contributions(together)[:, 0]  # bend_radius, end_torque, twist_rate
+    apart = Variation((Tolerance("end.point", "normal", (sigma,) * 3),))
+    assert np.all(contributions <= 1e-6 * sensitivities.contributions(apart)[:, 0])

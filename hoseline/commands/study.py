@@ -27,16 +27,24 @@ def study_command(
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
 ) -> None:
     """Sample the tolerances of a hose (and search lengths and clockings); write report.html, envelope.stl and tables."""
-    from hoseline.io.study_file import StudyFileError, load_study
-    from hoseline.io.study_results import PartialStore, fingerprint
-    from hoseline.procedures.variation.engine import ClusterError, Where
-    from hoseline.procedures.variation.run import run_study
-    from hoseline.report.study_report import write_study_report
+    from hoseline.procedures.variation.scheduler import ClusterError, scheduler_address
 
     if scheduler is not None and workers is not None:
         raise fail("--workers sets up a LocalCluster; with --scheduler the cluster's own workers run the study: "
                    "give one of them", BAD_INPUT)
+    if scheduler is not None:  # at once, before the solver is even loaded
+        try:
+            scheduler = scheduler_address(scheduler)
+        except ClusterError as exc:
+            raise fail(str(exc), BAD_INPUT) from None
+    from hoseline.io.study_file import StudyFileError, load_study
+
     study, base_text, base_path = read_input(load_study, study_file, "study file", (StudyFileError,))
+    from hoseline.io.study_results import PartialStore, fingerprint  # after the input is read: a refusal needs none
+    from hoseline.procedures.variation.engine import Where
+    from hoseline.procedures.variation.run import run_study
+    from hoseline.report.study_report import write_study_report
+
     text = study_file.read_text(encoding="utf-8")
     key = fingerprint(text, base_text, study)
     with errors_to_exit_codes(out):

@@ -14,7 +14,8 @@
     [[vary]]                           # one per tolerance; several on one parameter add up
     parameter = "end.point"            # start.point, end.point: mm
     distribution = "sphere"            #   normal (sigma), uniform (tolerance: +-mm), sphere (radius)
-    radius = 1.0                       #   sigma and tolerance: one number or one per axis [x, y, z]
+    radius = 1.0                       #   sigma and tolerance: one number or one per axis [x, y, z], or with
+                                       #   frame = "fitting" along the fitting's radial axes a, b and its axis
     [[vary]]
     parameter = "end.direction"        # start.direction, end.direction: degrees of cone
     distribution = "cone"              #   cone (angle: uniform within it), normal (sigma per axis)
@@ -34,9 +35,14 @@
     distribution = "lognormal"         #   lognormal (factor: 95 % within [1/f, f]), loguniform (factor),
     factor = 2.0                       #   uniform (range = [low, high] of the factor)
     [[vary]]
-    parameter = "end.twist"            # degrees: normal (sigma), uniform (range)
+    parameter = "end.twist"            # degrees: normal (sigma), uniform (range); offsets (length, twist)
+    distribution = "normal"            #   also triangular (range and mode) and truncnormal (sigma, range and
+    sigma = 3.0                        #   optionally mean: a process offset), as for hose.length
+    [[vary]]
+    parameter = "start.point"          # a shared contributor: the same deviation moves every parameter listed
+    shared_with = ["end.point"]        #   (same kind and unit), e.g. the subframe both mounts sit on
     distribution = "normal"
-    sigma = 3.0
+    sigma = 0.5
 
     [limits]                           # each optional
     bend_radius = 35.0                 # mm, at least (default: the hose's min_bend_radius)
@@ -68,16 +74,16 @@ import numpy as np
 from pydantic import AfterValidator, ConfigDict, Field, model_validator
 
 from hoseline.io.problem_file import ProblemFileError, _Section, _validated, load_problem, read_toml
-from hoseline.io.sweep_file import load_sweep
 from hoseline.procedures.variation.design_search import DesignGrid, default_rank_by
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
 from hoseline.procedures.variation.samples import StudyBase
 from hoseline.procedures.variation.study import Sampling, Study
 from hoseline.procedures.variation.tolerances import (DISTRIBUTIONS, PARAMETERS, Tolerance, Variation, clip_index,
-                                                      parameter_kind)
+                                                      fitting_axes, parameter_kind)
 
 MAX_SAMPLES = 10_000_000  # beyond this the stored samples would not fit in memory
 MAX_CANDIDATES = 100_000
+SIZE_KEYS = ("sigma", "tolerance", "radius", "angle", "range", "factor", "mode", "mean")  # of [[vary]]
 
 
 class StudyFileError(ProblemFileError):
@@ -121,8 +127,12 @@ class VarySection(_Section):
     angle: float | None = None
     range: list[float] | None = None
     factor: float | None = None
+    mode: float | None = None
+    mean: float | None = None
     unit: Literal["mm", "%"] = "mm"
     label: str = ""
+    shared_with: list[str] = Field(default_factory=list)
+    frame: Literal["world", "fitting"] = "world"
 
 
 class DesignSection(_Section):
@@ -192,6 +202,8 @@ def _base(path: Path, source: str, given: str) -> tuple[StudyBase, str]:
         raise StudyFileError(f"{source}: base = \"{given}\": cannot read {path}: {exc.strerror or exc}") from None
     try:
         if "bodies" in read_toml(path, ProblemFileError):
+            from hoseline.io.sweep_file import load_sweep  # here: its meshes' library is for sweeps alone
+
             sweep = load_sweep(path)
             return StudyBase(sweep.problem, sweep), text
         return StudyBase(load_problem(path)), text
@@ -214,44 +226,74 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
     except ValueError:
         raise StudyFileError(f"{source}: vary[{k}].parameter = \"{item.parameter}\": unknown; choose one of "
                              f"{', '.join(PARAMETERS)}, clips[k].point or clips[k].direction") from None
-    clip = clip_index(item.parameter)
+    for j, parameter in enumerate(item.shared_with):
+        try:
+            parameter_kind(parameter)
+        except ValueError:
+            raise StudyFileError(f"{source}: vary[{k}].shared_with[{j}] = \"{parameter}\": unknown; choose one of "
+                                 f"{', '.join(PARAMETERS)}, clips[k].point or clips[k].direction") from None
     clips = base.problem.clips
-    if clip is not None and clip >= len(clips):
-        raise StudyFileError(f"{where}: the base has {len(clips)} clip(s), numbered from 0: give clips[0] to "
-                             f"clips[{len(clips) - 1}]" if clips else f"{where}: the base has no clips")
-    if clip is not None and kind == "tilt" and not clips[clip].holds_direction:
-        raise StudyFileError(f"{where}: clip {clip} is a ball clip: it holds the position only, vary clips[{clip}].point")
+    for parameter in (item.parameter, *item.shared_with):
+        clip = clip_index(parameter)
+        if clip is not None and clip >= len(clips):
+            raise StudyFileError(f"{where}: {parameter}: the base has {len(clips)} clip(s), numbered from 0: give "
+                                 f"clips[0] to clips[{len(clips) - 1}]" if clips else f"{where}: the base has no clips")
+        if clip is not None and kind == "tilt" and not clips[clip].holds_direction:
+            raise StudyFileError(f"{where}: clip {clip} is a ball clip: it holds the position only, vary "
+                                 f"clips[{clip}].point")
     if item.distribution not in DISTRIBUTIONS[kind]:
         raise StudyFileError(f"{where}: distribution = \"{item.distribution}\" does not apply; choose one of "
                              f"{', '.join(DISTRIBUTIONS[kind])}")
-    keys = {"normal": "sigma", "uniform": "tolerance" if kind == "point" else "range", "sphere": "radius",
-            "cone": "angle", "lognormal": "factor", "loguniform": "factor"}
-    needed = keys[item.distribution]
-    given = [key for key in ("sigma", "tolerance", "radius", "angle", "range", "factor") if getattr(item, key) is not None]
-    if given != [needed]:
-        extra = [key for key in given if key != needed]
-        fix = f"remove {', '.join(extra)}" if extra else f"give {needed}"
-        raise StudyFileError(f"{where}: a {item.distribution} distribution takes {needed} only: {fix}")
+    needed = {"normal": ("sigma",), "uniform": ("tolerance",) if kind == "point" else ("range",), "sphere": ("radius",),
+              "cone": ("angle",), "lognormal": ("factor",), "loguniform": ("factor",), "triangular": ("range", "mode"),
+              "truncnormal": ("sigma", "range")}[item.distribution]
+    optional = ("mean",) if item.distribution == "truncnormal" else ()
+    given = [key for key in SIZE_KEYS if getattr(item, key) is not None]
+    missing = [key for key in needed if key not in given]
+    extra = [key for key in given if key not in needed + optional]
+    if missing or extra:
+        fix = "; ".join(part for part in (f"remove {', '.join(extra)}" if extra else "",
+                                          f"give {', '.join(missing)}" if missing else "") if part)
+        also = f" (and optionally {', '.join(optional)})" if optional else ""
+        raise StudyFileError(f"{where}: a {item.distribution} distribution takes {' and '.join(needed)}{also} only: {fix}")
+    axes = ()
+    if item.frame == "fitting":
+        if kind != "point":
+            raise StudyFileError(f"{where}: frame = \"fitting\" applies to points (start.point, end.point, "
+                                 "clips[k].point): remove it")
+        clip = clip_index(item.parameter)
+        direction = {"start.point": base.problem.start.direction, "end.point": base.problem.end.direction}.get(
+            item.parameter, None if clip is None else clips[clip].direction)
+        if direction is None:
+            raise StudyFileError(f"{where}: frame = \"fitting\": clip {clip} is a ball clip, it has no axis: use "
+                                 "frame = \"world\"")
+        axes = fitting_axes(direction)
     if item.unit == "%" and item.parameter != "hose.length":
         raise StudyFileError(f"{where}: unit = \"%\" applies to hose.length only: remove it")
-    value = getattr(item, needed)
     try:
-        if kind == "point" and needed in ("sigma", "tolerance"):
+        if kind == "point" and needed[0] in ("sigma", "tolerance"):
+            value = getattr(item, needed[0])
             size = tuple(value) if isinstance(value, list) else (float(value),) * 3
             if len(size) != 3:
-                raise ValueError(f"{needed} must be one number or three [x, y, z]")
-        elif needed == "range":
-            if len(value) != 2:
+                raise ValueError(f"{needed[0]} must be one number or three [x, y, z]")
+        elif "range" in needed:
+            if len(item.range) != 2:
                 raise ValueError("range must be [low, high]")
-            size = tuple(value)
+            low, high = item.range
+            if item.distribution == "triangular":
+                size = (low, _scalar(item.mode, "mode"), high)
+            elif item.distribution == "truncnormal":
+                size = (_scalar(item.mean or 0.0, "mean"), _scalar(item.sigma, "sigma"), low, high)
+            else:
+                size = (low, high)
         else:
-            size = (_scalar(value, needed),)
+            size = (_scalar(getattr(item, needed[0]), needed[0]),)
         if item.unit == "%":
             size = tuple(v * base.problem.hose.length / 100.0 for v in size)
-        if item.parameter == "hose.mass_per_length" and base.problem.hose.mass_per_length == 0.0:
+        if "hose.mass_per_length" in (item.parameter, *item.shared_with) and base.problem.hose.mass_per_length == 0.0:
             raise ValueError("the base hose is weightless (mass_per_length = 0): a factor changes nothing; give its "
                              "mass_per_length in the base file")
-        return Tolerance(item.parameter, item.distribution, size, item.label)
+        return Tolerance(item.parameter, item.distribution, size, item.label, tuple(item.shared_with), axes)
     except ValueError as exc:
         raise StudyFileError(f"{where}: {exc}") from None
 

@@ -198,21 +198,26 @@ def study_document(outcome: StudyOutcome) -> dict:
         "problem": problem_to_dict(study.base.problem),
         "sampling": {"method": study.sampling.method, "samples": study.sampling.count, "seed": study.sampling.seed,
                      "batch": study.sampling.batch_size()},
-        "tolerances": [{"parameter": t.parameter, "distribution": t.distribution, "size": list(t.size),
-                        "label": t.name} for t in study.variation.tolerances],
+        "tolerances": [{"parameter": t.parameter, "shared_with": list(t.shared_with), "distribution": t.distribution,
+                        "size": list(t.size), "axes": [list(row) for row in t.axes] or "world", "label": t.name}
+                       for t in study.variation.tolerances],
         "nominal": dict(zip(names, outcome.nominal)),
         "quantities": {
-            q.name: {"unit": q.unit, "mean": s.mean, "std": s.std, **{f"P{p:g}": v for p, v in zip(PERCENTILES, s.percentiles)},
+            q.name: {"unit": q.unit, "mean": s.mean, "mean_ci95": list(s.mean_interval), "std": s.std,
+                     **{f"P{p:g}": v for p, v in zip(PERCENTILES, s.percentiles)},
+                     **{f"P{p:g}_ci95": list(i) for p, i in zip(PERCENTILES, s.percentile_intervals)},
                      "min": s.minimum, "max": s.maximum, "solved": s.solved}
             for q, s in zip(study.quantities, outcome.spreads)
         },
         "probabilities": [
             {"limit": p.limit.describe(), "quantity": p.limit.quantity.name, "value": p.limit.value,
              "probability": p.estimate, "ci95": [p.low, p.high], "ci95_high_counting_failed": p.high_with_failed,
-             "broken": p.broken, "solved": p.solved, "failed": p.failed, "worst_sample": w}
+             "broken": p.broken, "solved": p.solved, "failed": p.failed, "cpk": p.cpk, "ppm_if_normal": p.ppm,
+             "worst_sample": w}
             for p, w in zip(outcome.probabilities, outcome.worst)
         ],
-        "failures": outcome.failures,
+        "failures": [{"cause": f.cause, "count": f.count, "samples": list(f.samples), "example": f.example}
+                     for f in outcome.failures],
         "notes": outcome.notes,
         "run": outcome.run,
     }

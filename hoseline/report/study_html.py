@@ -25,6 +25,8 @@ from hoseline.report.study_figures import (
 )
 from hoseline.report.sweep_html import STYLE, _format, _performance_table
 
+SAMPLES_LISTED = 20  # sample indexes shown per failure cause (summary.json lists them all)
+
 
 def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_text: str = "") -> str:
     """The whole page.  envelope: the envelope mesh of the samples, or None.  input_text: the study file."""
@@ -66,12 +68,21 @@ def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_te
     if outcome.design is not None:
         parts += ["<h2>Design search</h2>", _design_table(outcome), _figure(design_figure(outcome))]
     if outcome.failures:
-        parts += ["<h2>Failed samples</h2>", "<table><tr><th>reason</th><th>samples</th></tr>"
-                  + "".join(f"<tr><td>{html.escape(r)}</td><td class=\"number\">{n}</td></tr>"
-                            for r, n in outcome.failures.items()) + "</table>"]
+        parts += ["<h2>Failed samples</h2>", "<p>Grouped by cause (the reason with its numbers as #); every failed "
+                  "sample and its whole reason are in samples.csv.</p>",
+                  "<table><tr><th>cause</th><th>samples</th><th>which</th><th>for example</th></tr>"
+                  + "".join(f"<tr><td>{html.escape(f.cause)}</td><td class=\"number\">{f.count}</td>"
+                            f"<td>{_sample_list(f.samples)}</td><td>{html.escape(f.example)}</td></tr>"
+                            for f in outcome.failures) + "</table>"]
     parts += ["<h2>Run</h2>", _performance_table(outcome.run), "<h2>Input</h2>",
               f"<pre>{html.escape(input_text)}</pre>" if input_text else "<p>(no input file)</p>", "</body></html>"]
     return "\n".join(parts)
+
+
+def _sample_list(samples: tuple[int, ...]) -> str:
+    """The sample indexes of a failure cause, the first SAMPLES_LISTED of them."""
+    listed = ", ".join(str(k) for k in samples[:SAMPLES_LISTED])
+    return listed + (f", ... ({len(samples) - SAMPLES_LISTED} more)" if len(samples) > SAMPLES_LISTED else "")
 
 
 def _figure(figure) -> str:
@@ -91,7 +102,8 @@ def _intro(outcome: StudyOutcome) -> str:
 
 def _probability_table(outcome: StudyOutcome) -> str:
     rows = ["<table><tr><th>limit</th><th>nominal</th><th>P(broken)</th><th>95 % interval</th>"
-            "<th>upper end if failed samples broke it</th><th>broken / solved</th><th>worst sample</th></tr>"]
+            "<th>upper end if failed samples broke it</th><th>broken / solved</th><th>Cpk</th>"
+            "<th>ppm if normal</th><th>worst sample</th></tr>"]
     names = [q.name for q in outcome.study.quantities]
     for p, worst in zip(outcome.probabilities, outcome.worst):
         nominal = outcome.nominal[names.index(p.limit.quantity.name)]
@@ -99,20 +111,31 @@ def _probability_table(outcome: StudyOutcome) -> str:
         rows.append(f"<tr><td>{html.escape(p.limit.describe())}</td><td class=\"number\">{_format(float(nominal))}</td>"
                     f"<td class=\"number\"><span{status}>{p.estimate:.4g}</span></td>"
                     f"<td class=\"number\">[{p.low:.3g}, {p.high:.3g}]</td><td class=\"number\">{p.high_with_failed:.3g}</td>"
-                    f"<td class=\"number\">{p.broken} / {p.solved}</td><td class=\"number\">{_format(worst)}</td></tr>")
+                    f"<td class=\"number\">{p.broken} / {p.solved}</td><td class=\"number\">{p.cpk:.3g}</td>"
+                    f"<td class=\"number\">{p.ppm:.3g}</td><td class=\"number\">{_format(worst)}</td></tr>")
     rows.append("</table>")
     return "\n".join(rows)
 
 
 def _spread_table(outcome: StudyOutcome) -> str:
-    rows = ["<table><tr><th>quantity</th><th>nominal</th><th>mean</th><th>std</th><th>P5</th><th>P50</th><th>P95</th>"
+    rows = ["<p>Each estimate with its 95 % confidence interval below it (the mean's by Student's t, the "
+            "percentiles' by order statistics, distribution-free).</p>"
+            "<table><tr><th>quantity</th><th>nominal</th><th>mean</th><th>std</th><th>P5</th><th>P50</th><th>P95</th>"
             "<th>min</th><th>max</th></tr>"]
     for q, s, nominal in zip(outcome.study.quantities, outcome.spreads, outcome.nominal):
-        cells = [float(nominal), s.mean, s.std, *s.percentiles, s.minimum, s.maximum]
+        cells = [_format(float(nominal)), _with_interval(s.mean, s.mean_interval), _format(s.std),
+                 *(_with_interval(v, i) for v, i in zip(s.percentiles, s.percentile_intervals)),
+                 _format(s.minimum), _format(s.maximum)]
         rows.append(f"<tr><td>{html.escape(q.name)} [{html.escape(q.unit)}]</td>"
-                    + "".join(f'<td class="number">{_format(float(v))}</td>' for v in cells) + "</tr>")
+                    + "".join(f'<td class="number">{cell}</td>' for cell in cells) + "</tr>")
     rows.append("</table>")
     return "\n".join(rows)
+
+
+def _with_interval(value: float, interval: tuple[float, float]) -> str:
+    """A value with its confidence interval on the line below."""
+    low, high = interval
+    return f"{_format(float(value))}<br><small>[{_format(float(low))}, {_format(float(high))}]</small>"
 
 
 def _first_order_table(outcome: StudyOutcome) -> str:
@@ -139,7 +162,7 @@ def _design_table(outcome: StudyOutcome) -> str:
         optimised = sum(r.optimised for r in design.refined)
         intro += (f"<p>Optimiser: for each of the {len(design.refined)} lengths with a grid candidate meeting every "
                   f"limit, the margin of {html.escape(grid.rank_by)} maximised over the clocking between the grid points "
-                  f"either side of its best candidate (Brent's bounded method, to {CLOCKING_TOLERANCE:g} deg); "
+                  f"either side of its best candidate, every limit a constraint (COBYQA, to {CLOCKING_TOLERANCE:g} deg); "
                   f"{optimised} improved on the grid, the others keep the grid's clocking (column \"clocking from\"). "
                   f"{sum(r.evaluations for r in design.refined)} candidates solved. The table ranks these; the heat map "
                   "shows the grid, the optimiser's candidates as crosses.</p>")

@@ -5,12 +5,14 @@ drawing (mount positions and directions, length, stiffness, weight, clocking) an
 built with them; designs.py draws the points (Monte Carlo, Latin hypercube, Sobol);
 quantities.py defines what is judged and the limits; samples.py solves one sample (placement or
 sweep) and reads it; nominal.py holds the nominal placement's equilibria and starts samples from
-them (warm start); engine.py runs the samples in batches on Dask distributed; statistics.py turns
+them (warm start); engine.py runs the samples in batches on Dask distributed, and scheduler.py
+checks an existing cluster's scheduler reachable before anything is solved; statistics.py turns
 samples into envelopes, probabilities with confidence intervals and variances; sensitivity.py
 differentiates the quantities with respect to every parameter at the nominal equilibrium
 (implicit function theorem with the exact Hessian) for the first-order variance, and
 sweep_sensitivity.py the same at every pose of a sweep for its extremes over the poses;
-design_search.py judges and ranks hose lengths and clockings; study.py holds a study and reads
+design_search.py judges and ranks hose lengths and clockings (the clocking refined with every
+limit a constraint); study.py holds a study and reads
 its outcome off the samples; run.py runs a study from start to end.
 
 May import: model/, mechanics/, placement/, geometry/, sweep/.  Not: scans/, io/, report/.

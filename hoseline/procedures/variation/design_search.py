@@ -14,21 +14,25 @@ heat map of the report.
 
 With method "optimise" the grid is refined: lengths are discrete (catalogue steps) and stay so,
 the clocking is continuous.  For every length with a grid cell meeting every limit, the margin of
-`rank_by` is maximised over the clocking by Brent's bounded method (scipy.optimize.minimize_scalar,
-"bounded": golden sections with parabolic steps, no derivatives) within the bracket of its best
-such cell (from the clocking on its left to the one on its right, both grid points), to
-CLOCKING_TOLERANCE.  The refined clocking is kept only when it meets every limit and beats the
-grid cell; else the grid cell stands, and the table says which.  Why this and not a global
-optimiser over both (e.g. differential evolution with an integral length): the margin over the
-clocking is an extreme over the poses (a kink where the active pose changes) and can have several
-humps; the grid, which the heat map needs anyway, finds the hump, and the local search only
-polishes inside a bracket every point of which is between two candidates the grid judged, so
-the answer is never a point the grid did not vouch for the neighbourhood of; it is deterministic
-(the same numbers each run, as the samples are) and costs about a dozen solves per length, where
-an evolutionary search costs hundreds of whole sweeps and its answer depends on its seed.  A
-derivative-free method because the margin has kinks (the active pose, the 5th percentile over
-tolerance samples) where gradients mislead.  Each length is one task (on Dask when there is a
-cluster).
+`rank_by` is maximised over the clocking subject to every limit (each judged margin >= 0, a
+constraint) within the bracket of its best such cell (from the clocking on its left to the one on
+its right, both grid points), by COBYQA (scipy.optimize.minimize, method "COBYQA": a derivative-free
+trust-region method on quadratic models of the objective and of each constraint, bounds kept at
+every evaluation; a failed candidate is NaN, which COBYQA treats as beyond a barrier), from the grid
+cell, to CLOCKING_TOLERANCE.  Every clocking evaluated is checked against every limit, and the
+answer is the best of them that meets every limit (the grid cell when none beats it), so the answer
+meets every limit whatever the optimiser's last point is; the table says which.  Why a constrained
+optimiser: the best clocking is often where another limit becomes active (the end torque grows as
+the bend relaxes), and maximising the ranked margin alone walks past it into a design that breaks
+that limit.  Why this and not a global optimiser over both (e.g. differential evolution with an
+integral length): the margin over the clocking is an extreme over the poses (a kink where the
+active pose changes) and can have several humps; the grid, which the heat map needs anyway, finds
+the hump, and the local search only polishes inside a bracket every point of which is between two
+candidates the grid judged; it is deterministic (the same numbers each run, as the samples are)
+and costs about a dozen solves per length, where an evolutionary search costs hundreds of whole
+sweeps and its answer depends on its seed.  A derivative-free method because the margins have
+kinks (the active pose, the 5th percentile over tolerance samples) where gradients mislead.  Each
+length is one task (on Dask when there is a cluster).
 """
 
 from __future__ import annotations
@@ -36,16 +40,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
+from scipy.optimize import Bounds, NonlinearConstraint, minimize
 
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit
-from hoseline.procedures.variation.samples import StudyContext, evaluate_batch
+from hoseline.procedures.variation.samples import StudyContext, evaluate_batch, failure_cause
 from hoseline.procedures.variation.tolerances import INDEX
 
 DESIGN_PERCENTILE = 5.0  # with tolerances, a limit is met when this percentile of its margin is not negative
 METHODS = ("grid", "optimise")
-CLOCKING_TOLERANCE = 0.01  # degrees: the optimiser's absolute tolerance on the clocking
-FAILED = 1e30  # the objective where a candidate cannot be built (finite, so Brent's parabolas stay defined)
+CLOCKING_TOLERANCE = 0.01  # degrees: the optimiser's final trust-region radius on the clocking
+MAX_EVALUATIONS = 40  # candidates solved by the optimiser per length at most
 
 
 @dataclass(frozen=True)
@@ -120,7 +124,8 @@ class Refined:
 @dataclass
 class DesignOutcome:
     """The judged grid: margins (L, C, limits) mm or the quantity's unit (the 5th percentile with tolerances;
-    NaN where the candidate failed), failed (L, C) how many of its samples failed, the reasons, and the ranking
+    NaN where the candidate failed), failed (L, C) how many of its samples failed, the causes of the failures
+    (samples.failure_cause), and the ranking
     (indexes (i, j) into lengths x clockings of the candidates meeting every limit, best first).  With the
     optimiser, refined: one per length that has a grid cell meeting every limit, ranked best first (the
     table is then theirs)."""
@@ -175,7 +180,7 @@ def judge(grid: DesignGrid, limits: tuple[Limit, ...], names: list[str], samples
     rank = [limit.quantity.name for limit in limits].index(grid.rank_by)
     feasible = [(i, j) for i in range(shape[0]) for j in range(shape[1]) if meets_every_limit(margins[i, j])]
     feasible.sort(key=lambda ij: (-margins[ij[0], ij[1], rank], abs(grid.clockings[ij[1]]), grid.lengths[ij[0]]))
-    reasons = sorted({str(r) for r in samples["reason"][samples["failed"]]})
+    reasons = sorted({failure_cause(str(r)) for r in samples["reason"][samples["failed"]]})
     return DesignOutcome(grid, limits, margins, failed.sum(axis=2), reasons, feasible)
 
 
@@ -215,10 +220,11 @@ def refine_tasks(outcome: DesignOutcome, names: list[str], nominal_length: float
 
 
 def refine_length(context: StudyContext, task: RefineTask) -> dict[str, np.ndarray]:
-    """Maximise the margin of rank_by over the clocking within the task's bracket for its length (a Dask task).
+    """Maximise the margin of rank_by over the clocking within the task's bracket for its length, every limit a
+    constraint (a Dask task).
 
     Returns arrays: clocking (1,) deg, margins (limits,), evaluations (1,), optimised (1,) bool (False: the grid's
-    clocking stands, the refined one meeting not every limit or not beating it).
+    clocking stands, no clocking evaluated both meeting every limit and beating it).
     """
     seen: dict[float, np.ndarray] = {}
 
@@ -229,17 +235,16 @@ def refine_length(context: StudyContext, task: RefineTask) -> dict[str, np.ndarr
             seen[clocking] = candidate_margins(task.limits, list(task.names), out["values"], out["failed"])
         return seen[clocking]
 
-    def objective(clocking: float) -> float:
-        margin = margins(float(clocking))[task.rank]
-        return -margin if np.isfinite(margin) else FAILED
-
     low, high = task.bracket
-    best, found, optimised = task.start, task.start_margins, False
     if high > low:
-        result = minimize_scalar(objective, bounds=(low, high), method="bounded", options={"xatol": CLOCKING_TOLERANCE})
-        clocking = float(result.x)
-        candidate = margins(clocking)
-        if meets_every_limit(candidate) and candidate[task.rank] > task.start_margins[task.rank]:
+        minimize(lambda x: -margins(float(x[0]))[task.rank], np.array([task.start]), method="COBYQA",
+                 bounds=Bounds([low], [high]),
+                 constraints=NonlinearConstraint(lambda x: margins(float(x[0])), 0.0, np.inf),
+                 options={"initial_tr_radius": 0.25 * (high - low), "final_tr_radius": CLOCKING_TOLERANCE,
+                          "maxfev": MAX_EVALUATIONS})
+    best, found, optimised = task.start, task.start_margins, False
+    for clocking, candidate in seen.items():
+        if meets_every_limit(candidate) and candidate[task.rank] > found[task.rank]:
             best, found, optimised = clocking, candidate, True
     return {"clocking": np.array([best]), "margins": np.asarray(found, dtype=float),
             "evaluations": np.array([len(seen)]), "optimised": np.array([optimised])}

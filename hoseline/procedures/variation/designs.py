@@ -10,7 +10,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-from scipy.stats import qmc
 
 METHODS = ("monte-carlo", "latin-hypercube", "sobol")
 
@@ -28,6 +27,7 @@ def unit_design(method: str, count: int, dimensions: int, seed: int) -> np.ndarr
         raise ValueError(f"a design needs at least one sample and one dimension, got {count} x {dimensions}")
     if method == "monte-carlo":
         return np.random.default_rng(seed).random((count, dimensions))
+    from scipy.stats import qmc  # here: scipy.stats takes a second to import, and a refused study file needs none
     if method == "latin-hypercube":
         return qmc.LatinHypercube(d=dimensions, rng=seed).random(count)
     with warnings.catch_warnings():

@@ -10,6 +10,9 @@ order they finish; batches already done (a resumed study) are not run again.
 Where: a LocalCluster of `workers` processes on this machine (default: one per core; loopback
 only, its dashboard on a free port), an existing cluster (a scheduler address tcp://HOST:PORT or
 a scheduler file), or, with workers = 0, in this process without Dask (small runs and tests).
+An existing cluster's address is checked first (scheduler.scheduler_address: the file read, the
+port opened within a second), so a wrong address is refused at once, before any solving, rather
+than after Dask's CONNECT_SECONDS.
 Since every sample depends only on its index and deviations, the numbers are the same whichever
 is used.
 """
@@ -20,20 +23,18 @@ import logging
 import math
 import os
 from collections.abc import Callable, Collection
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 from distributed import Client, LocalCluster, WorkerPlugin, as_completed
 
 from hoseline.procedures.variation.samples import StudyContext, evaluate_batch
+from hoseline.procedures.variation.scheduler import ClusterError, scheduler_address
 
-CONNECT_SECONDS = 30  # waiting for an existing scheduler
+CONNECT_SECONDS = 30  # waiting for an existing scheduler (once its port was seen open)
 MAX_BATCH = 200  # samples per task at most (about a second of work for a placement)
 BATCHES_PER_RUN = 64  # the default batch size aims at this many tasks
-
-
-class ClusterError(RuntimeError):
-    """The Dask cluster could not be started or reached; the message says which and why."""
 
 
 def default_batch_size(count: int) -> int:
@@ -93,36 +94,64 @@ class Engine:
     """Runs batches where `where` says; a context manager (the cluster, if it started one, closes on exit).
 
         with Engine(Where(workers=2)) as engine:
+            ...                                   # the cluster starts and warms meanwhile
             engine.run(context, coordinates, batch_size, on_batch, done=set())
+
+    Entering starts the cluster (and warms its workers) in a background thread and returns at once, so
+    the caller's own work before the first batch (the nominal hose, the sensitivities) overlaps the
+    workers' start-up; `client` waits for it and raises ClusterError if it failed.  Leaving closes the
+    cluster in that thread too, so the caller's work after the last batch (the statistics, the files)
+    overlaps the workers' shut-down; the interpreter waits for it before it exits.
     """
 
     def __init__(self, where: Where = Where()) -> None:
         self.where = where
-        self.client: Client | None = None
         self.cluster: LocalCluster | None = None
+        self._client: Client | None = None
+        self._starter: ThreadPoolExecutor | None = None
+        self._started: Future | None = None
 
     def __enter__(self) -> "Engine":
+        if self.where.scheduler is not None or self.where.workers != 0:
+            self._starter = ThreadPoolExecutor(max_workers=1, thread_name_prefix="hoseline-cluster-start")
+            self._started = self._starter.submit(self._start)
+        return self
+
+    def _start(self) -> None:
+        """Start or reach the cluster and warm its workers (raises ClusterError)."""
         scheduler = self.where.scheduler
-        if scheduler is None and self.where.workers == 0:
-            return self
         try:
             if scheduler is None:
                 self.cluster = LocalCluster(n_workers=self.where.local_workers(), threads_per_worker=1, processes=True,
                                             host="127.0.0.1", dashboard_address=":0", silence_logs=logging.ERROR)
-                self.client = Client(self.cluster)
-            elif os.path.isfile(scheduler):
-                self.client = Client(scheduler_file=scheduler, timeout=CONNECT_SECONDS)
+                self._client = Client(self.cluster)
             else:
-                self.client = Client(scheduler, timeout=CONNECT_SECONDS)
+                self._client = Client(scheduler_address(scheduler), timeout=CONNECT_SECONDS)
         except (OSError, TimeoutError, ValueError) as exc:
-            self.__exit__()
             raise ClusterError(f"cannot start or reach the Dask cluster ({self.where.describe()}): {exc}") from None
-        self.client.register_plugin(WarmSolver())
-        return self
+        self._client.register_plugin(WarmSolver())
+
+    def ready(self) -> None:
+        """Wait until the cluster is up and its workers warm (at once without Dask); raises ClusterError if it failed."""
+        if self._started is not None:
+            self._started.result()
+
+    @property
+    def client(self) -> Client | None:
+        """The Dask client once the cluster is ready (None without Dask)."""
+        self.ready()
+        return self._client
 
     def __exit__(self, *exc) -> None:
-        if self.client is not None:
-            self.client.close()
+        if self._started is None:
+            return
+        self._starter.submit(self._close)  # after the start, in its thread; the caller writes its results meanwhile
+        self._starter.shutdown(wait=False)  # the interpreter still waits for it before it exits
+
+    def _close(self) -> None:
+        """Close the client and the cluster this engine started."""
+        if self._client is not None:
+            self._client.close()
         if self.cluster is not None:
             self.cluster.close()
 
@@ -145,16 +174,17 @@ class Engine:
         todo = [k for k in range(len(slices)) if k not in done]
         if not todo:
             return
-        if self.client is None:
+        client = self.client
+        if client is None:
             for k in todo:
                 on_batch(k, evaluate_batch(context, indices[slices[k]], coordinates[slices[k]]))
             return
         # hash=False: a key of its own, so that releasing an earlier stage's copy of an equal context cannot drop it
-        shared = self.client.scatter(context, broadcast=True, hash=False)
+        shared = client.scatter(context, broadcast=True, hash=False)
         futures = {}
         for k in todo:
             rows = slices[k]
-            futures[self.client.submit(evaluate_batch, shared, indices[rows], coordinates[rows], pure=False)] = k
+            futures[client.submit(evaluate_batch, shared, indices[rows], coordinates[rows], pure=False)] = k
         for future, arrays in as_completed(futures, with_results=True):
             on_batch(futures[future], arrays)
 
@@ -165,11 +195,12 @@ class Engine:
         todo = [k for k in range(len(items)) if k not in done]
         if not todo:
             return
-        if self.client is None:
+        client = self.client
+        if client is None:
             for k in todo:
                 on_result(k, function(context, items[k]))
             return
-        shared = self.client.scatter(context, broadcast=True, hash=False)
-        futures = {self.client.submit(function, shared, items[k], pure=False): k for k in todo}
+        shared = client.scatter(context, broadcast=True, hash=False)
+        futures = {client.submit(function, shared, items[k], pure=False): k for k in todo}
         for future, result in as_completed(futures, with_results=True):
             on_result(futures[future], result)

@@ -16,6 +16,7 @@ import numpy as np
 from hoseline.procedures.placement.continuation import PlacementError, Progress
 from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
+from hoseline.procedures.variation.scheduler import scheduler_address
 from hoseline.procedures.variation.samples import StudyContext, nominal_context
 from hoseline.procedures.variation.sensitivity import placement_sensitivities
 from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
@@ -49,26 +50,31 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
 
     stores: stage name ("samples", "design", "optimise") -> its BatchStore (default: in memory).  where: where the
     batches run.  progress: callable(phase, fraction).  Raises PlacementError when the nominal hose
-    cannot be solved.
+    cannot be solved, ClusterError at once (before any solving) when an existing cluster cannot be reached.
     """
     stores = stores or (lambda stage: MemoryStore())
     started = time.perf_counter()
-    context, nominal = nominal_context(study.base, warm=study.sampling.start == "nominal")
-    notes = []
-    sensitivities = None
-    if study.sensitivities and study.variation.tolerances:
-        try:
-            if study.base.sweep is not None:
-                sensitivities = sweep_sensitivities(study.base.sweep, study.variation.varied)
+    if where.scheduler is not None:
+        where = replace(where, scheduler=scheduler_address(where.scheduler))
+    with Engine(where) as engine:  # the cluster starts and warms while the nominal hose and sensitivities are solved
+        context, nominal = nominal_context(study.base, warm=study.sampling.start == "nominal")
+        notes = []
+        sensitivities = None
+        if study.sensitivities and study.variation.tolerances:
+            try:
+                if study.base.sweep is not None:
+                    sensitivities = sweep_sensitivities(study.base.sweep, study.variation.varied)
+                else:
+                    sensitivities = placement_sensitivities(study.base.problem, study.variation.varied)
+            except (PlacementError, ValueError) as exc:
+                notes.append(f"no sensitivities: {exc}")
             else:
-                sensitivities = placement_sensitivities(study.base.problem, study.variation.varied)
-        except (PlacementError, ValueError) as exc:
-            notes.append(f"no sensitivities: {exc}")
-        else:
-            notes.extend(sensitivities.kinks)
-    coordinates = study.coordinates()
-    timings = {}
-    with Engine(where) as engine:
+                notes.extend(sensitivities.kinks)
+        coordinates = study.coordinates()
+        tick = time.perf_counter()
+        timings = {"nominal": tick - started}
+        engine.ready()
+        timings["cluster"] = time.perf_counter() - tick
         tick = time.perf_counter()
         samples = _stage(engine, "samples", context, coordinates, study.sampling.batch_size(), stores, progress)
         timings["samples"] = time.perf_counter() - tick
@@ -92,6 +98,8 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
                                      deviations)
                 design.refined = ranked_refinements(tasks, _refine(engine, cold, tasks, stores, progress))
                 timings["optimiser"] = time.perf_counter() - tick
+        tick = time.perf_counter()
+    timings["close"] = time.perf_counter() - tick
     outcome = summarize(study, samples, nominal.values(nominal.centerlines), nominal.centerlines, sensitivities)
     outcome.notes[:0] = notes
     outcome.design = design
@@ -99,9 +107,12 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         "where": where.describe(),
         "samples": len(coordinates),
         "samples per second": len(coordinates) / timings["samples"] if len(coordinates) and timings["samples"] else None,
+        "seconds, nominal hose and sensitivities": timings["nominal"],
+        "seconds, waiting for the cluster (after the nominal hose)": timings["cluster"],
         "seconds, samples": timings["samples"],
         "seconds, design search": timings.get("design"),
         "seconds, design optimiser": timings.get("optimiser"),
+        "seconds, closing the cluster": timings["close"],
         "seconds, whole study": time.perf_counter() - started,
     }
     return outcome

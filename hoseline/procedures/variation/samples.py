@@ -7,7 +7,9 @@ where Newton does not reach a stable state; the first CHECKED_WARM_STARTS sample
 ways and the distance between the answers recorded); a
 sweep sample places the hose and carries it through the sweep (sweep.quasi_static.run_sweep,
 the free-roll comparison left out).  A sample that fails (the hose does not reach its mounts,
-the path cannot be followed, the final state is not stable) is kept with its reason.
+the path cannot be followed, the final state is not stable: SOLVER_FAILURES) is kept with its
+reason; any other exception is a fault of the program and stops the study.  failure_cause gives
+the cause of a reason, its numbers left out, so that failures can be grouped by cause.
 
 evaluate_batch runs a block of samples; it is what a Dask task runs, and its output depends
 only on the context and the sample indices and deviations it is given.
@@ -15,6 +17,7 @@ only on the context and the sample indices and deviations it is given.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -23,6 +26,7 @@ from hoseline.mechanics.newton import RodProperties, node_positions
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.model.problem import Problem
 from hoseline.model.sweep import SweepProblem
+from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.hose_health import hose_health
 from hoseline.procedures.placement.sequence import place_only
 from hoseline.procedures.sweep.quasi_static import run_sweep
@@ -32,6 +36,18 @@ from hoseline.procedures.variation.tolerances import perturbed
 
 SHAPE_POSES = 12  # poses of a sweep whose centrelines each sample keeps, for the envelope
 CHECKED_WARM_STARTS = 32  # the first samples of a warm-started study are also placed from the straight hose
+# what a sample that cannot be built raises: the solver's PlacementError (no path, no stable state) and the model's
+# ValueError (the deviated hose does not reach its mounts or clips, a ball clip given a direction; numpy's
+# LinAlgError is one too)
+SOLVER_FAILURES = (PlacementError, ValueError)
+# a number in a reason, unless it is part of a name (clips[0], x2): what differs between samples failing alike
+_NUMBER = re.compile(r"(?<![\w\[.])[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def failure_cause(reason: str) -> str:
+    """The cause of a failed sample's reason: the reason with its numbers replaced by "#" (e.g. "ValueError:
+    hose.length = # mm is not longer than the mount distance # mm ...")."""
+    return _NUMBER.sub("#", reason)
 
 
 @dataclass(frozen=True)
@@ -132,6 +148,7 @@ def _read(context: StudyContext, index: int, deviation: np.ndarray) -> tuple[Pos
 def evaluate_batch(context: StudyContext, indices: np.ndarray, coordinates: np.ndarray) -> dict[str, np.ndarray]:
     """Solve and read the samples `indices` with the deviations `coordinates` (b, width) from the base problem.
 
+    Raises what is not one of SOLVER_FAILURES (a fault of the program, not of the sample).
     Returns arrays with one row per sample: index, failed (bool), reason (text, "" when solved),
     snaps (snap-throughs along a sweep), warm (started by Newton from the nominal hose), branch_distance
     (mm from the published sequence's answer, for the first CHECKED_WARM_STARTS warm-started samples;
@@ -162,7 +179,7 @@ def evaluate_batch(context: StudyContext, indices: np.ndarray, coordinates: np.n
         try:
             readings, snaps, out["warm"][row], out["branch_distance"][row] = _read(context, int(indices[row]),
                                                                                   coordinates[row])
-        except Exception as exc:  # noqa: BLE001 - every failure is recorded with its reason, none is dropped
+        except SOLVER_FAILURES as exc:  # a hose that cannot be built: recorded with its reason, none is dropped
             out["failed"][row] = True
             out["reason"][row] = f"{type(exc).__name__}: {exc}"
             continue

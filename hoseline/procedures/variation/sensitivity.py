@@ -81,8 +81,7 @@ class Sensitivities:
         """(q, tolerances): the standard deviation each tolerance alone gives each quantity (the tornado chart)."""
         out = np.zeros((len(self.names), len(variation.tolerances)))
         for k, tolerance in enumerate(variation.tolerances):
-            index = np.array(tolerance.coordinates)
-            g = self.derivatives[:, index]
+            g = sum(self.derivatives[:, list(target)] for target in tolerance.targets)  # one deviation, every target
             out[:, k] = np.sqrt(np.einsum("qi,ij,qj->q", g, tolerance.covariance(), g))
         return out
 

@@ -2,7 +2,8 @@
 
 Probabilities are the fraction of solved samples beyond the limit, with the exact
 (Clopper-Pearson) 95 % interval of a binomial proportion; failed samples are counted apart,
-and the interval's upper end if every failed sample broke the limit is given beside it.  For
+and the interval's upper end if every failed sample broke the limit is given beside it, with the
+limit's process capability (Cpk, and the parts per million a normal quantity would put beyond it).  For
 Latin hypercube and Sobol designs the binomial interval is conservative (such designs usually
 estimate better than independent samples).
 
@@ -15,10 +16,11 @@ numbers must not be used.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import binomtest
+from scipy.special import ndtr
 
 from hoseline.procedures.variation.quantities import Limit
 
@@ -31,7 +33,14 @@ NEGLIGIBLE = 1e-9  # standard deviations below this fraction of a quantity's nat
 @dataclass(frozen=True)
 class Probability:
     """P(the limit is broken): estimate and 95 % interval over the solved samples, and the interval's
-    upper end counting every failed sample as broken.  broken, solved, failed: sample counts."""
+    upper end counting every failed sample as broken.  broken, solved, failed: sample counts.
+
+    cpk: the process capability of the (one-sided) limit, the mean's margin over three standard
+    deviations of the solved samples (Cp needs two limits of one quantity: none here); ppm: the parts per
+    million beyond the limit a normal quantity of that mean and standard deviation would give,
+    1e6 Phi(-3 cpk) (beside the estimate counted, a check of how far from normal the tail is).  NaN with
+    fewer than two solved samples.
+    """
 
     limit: Limit
     broken: int
@@ -41,6 +50,8 @@ class Probability:
     low: float
     high: float
     high_with_failed: float
+    cpk: float = float("nan")
+    ppm: float = float("nan")
 
 
 def probability(limit: Limit, values: np.ndarray) -> Probability:
@@ -51,16 +62,34 @@ def probability(limit: Limit, values: np.ndarray) -> Probability:
     broken = int(np.sum(limit.margin(solved) < 0.0))
     if solved.size == 0:
         return Probability(limit, 0, 0, failed, float("nan"), 0.0, 1.0, 1.0)
+    from scipy.stats import binomtest  # here: scipy.stats takes a second to import, and a refused study file needs none
+
     interval = binomtest(broken, solved.size).proportion_ci(CONFIDENCE, method="exact")
     worst = binomtest(broken + failed, values.size).proportion_ci(CONFIDENCE, method="exact")
+    cpk, ppm = capability(limit, solved)
     return Probability(limit, broken, int(solved.size), int(failed), broken / solved.size, float(interval.low),
-                       float(interval.high), float(worst.high))
+                       float(interval.high), float(worst.high), cpk, ppm)
+
+
+def capability(limit: Limit, solved: np.ndarray) -> tuple[float, float]:
+    """(cpk, expected ppm beyond the limit if normal) of the solved values of the limited quantity (Probability)."""
+    if solved.size < 2:
+        return float("nan"), float("nan")
+    sigma = float(np.std(solved, ddof=1))
+    margin = float(limit.margin(np.mean(solved)))
+    if sigma == 0.0:
+        return math.copysign(math.inf, margin), 0.0 if margin >= 0.0 else 1e6
+    cpk = margin / (3.0 * sigma)
+    return cpk, 1e6 * float(ndtr(-3.0 * cpk))
 
 
 @dataclass(frozen=True)
 class Spread:
     """The distribution of one quantity over the solved samples: mean, standard deviation, variance
-    and its standard error, the PERCENTILES, the extremes, and how many samples were solved."""
+    and its standard error, the PERCENTILES, the extremes, and how many samples were solved; with the
+    95 % confidence interval of the mean (Student's t) and of each percentile (distribution-free: the
+    order statistics whose ranks bound the binomial count of samples below it; -inf or inf where too
+    few samples lie beyond it to bound it)."""
 
     mean: float
     std: float
@@ -70,6 +99,8 @@ class Spread:
     minimum: float
     maximum: float
     solved: int
+    mean_interval: tuple[float, float] = (float("nan"), float("nan"))
+    percentile_intervals: tuple[tuple[float, float], ...] = ()
 
 
 def spread(values: np.ndarray) -> Spread:
@@ -79,12 +110,24 @@ def spread(values: np.ndarray) -> Spread:
     n = x.size
     if n < 4:
         nan = float("nan")
-        return Spread(nan, nan, nan, nan, (nan,) * len(PERCENTILES), nan, nan, n)
+        return Spread(nan, nan, nan, nan, (nan,) * len(PERCENTILES), nan, nan, n, (nan, nan), ((nan, nan),) * len(PERCENTILES))
+    from scipy.stats import binom, t  # here: scipy.stats takes a second to import, and a refused study file needs none
+
     variance = float(np.var(x, ddof=1))
     m4 = float(np.mean((x - x.mean()) ** 4))
     error = float(np.sqrt(max(m4 - variance**2 * (n - 3) / (n - 1), 0.0) / n))
+    half = float(t.ppf(0.5 + CONFIDENCE / 2.0, n - 1) * np.sqrt(variance / n))
+    ordered = np.sort(x)
+    intervals = []
+    for p in PERCENTILES:
+        # ranks l, u (from 1) with P(l <= B <= u - 1) >= CONFIDENCE, B ~ Binomial(n, p) the samples below the percentile
+        low = int(binom.ppf((1.0 - CONFIDENCE) / 2.0, n, p / 100.0))
+        high = int(binom.ppf(0.5 + CONFIDENCE / 2.0, n, p / 100.0)) + 1
+        intervals.append((float(ordered[low - 1]) if low >= 1 else -math.inf,
+                          float(ordered[high - 1]) if high <= n else math.inf))
     return Spread(float(x.mean()), float(np.sqrt(variance)), variance, error,
-                  tuple(float(v) for v in np.percentile(x, PERCENTILES)), float(x.min()), float(x.max()), n)
+                  tuple(float(v) for v in np.percentile(x, PERCENTILES)), float(x.min()), float(x.max()), n,
+                  (float(x.mean()) - half, float(x.mean()) + half), tuple(intervals))
 
 
 @dataclass(frozen=True)

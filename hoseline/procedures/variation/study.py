@@ -9,7 +9,6 @@ the sensitivities beside the Monte Carlo ones.
 
 from __future__ import annotations
 
-from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,7 +18,7 @@ from hoseline.procedures.variation.designs import balanced, unit_design
 from hoseline.procedures.variation.design_search import DesignGrid, DesignOutcome
 from hoseline.procedures.variation.engine import default_batch_size
 from hoseline.procedures.variation.quantities import Limit, Quantity, natural_scale, quantities
-from hoseline.procedures.variation.samples import StudyBase
+from hoseline.procedures.variation.samples import StudyBase, failure_cause
 from hoseline.procedures.variation.sensitivity import Sensitivities
 from hoseline.procedures.variation.statistics import (
     PERCENTILES,
@@ -103,6 +102,30 @@ class FirstOrder:
     derivatives: np.ndarray  # (quantities, 15) per unit of each coordinate (Sensitivities.derivatives)
 
 
+@dataclass(frozen=True)
+class FailureCause:
+    """Failed samples with one cause: cause (the reason with its numbers as "#", samples.failure_cause), count,
+    samples (their indexes, ascending), example (the first one's whole reason)."""
+
+    cause: str
+    count: int
+    samples: tuple[int, ...]
+    example: str
+
+
+def failure_causes(reasons: np.ndarray, failed: np.ndarray) -> list[FailureCause]:
+    """The failed samples grouped by cause, the most frequent first (ties: the first sample first).
+
+    reasons: (n,) text per sample; failed: (n,) bool.
+    """
+    groups: dict[str, list[int]] = {}
+    for index in np.flatnonzero(failed):
+        groups.setdefault(failure_cause(str(reasons[index])), []).append(int(index))
+    causes = [FailureCause(cause, len(indexes), tuple(indexes), str(reasons[indexes[0]]))
+              for cause, indexes in groups.items()]
+    return sorted(causes, key=lambda c: (-c.count, c.samples[0]))
+
+
 @dataclass
 class StudyOutcome:
     """Everything a study found.
@@ -113,7 +136,7 @@ class StudyOutcome:
     envelopes: per kept pose (base.shape_poses()) the station envelope (statistics.station_envelope).
     deviation: per station P5/P50/P95 (3, N+1) and the maximum (N+1,) of the distance from nominal, mm.
     clearance: per obstacle and pose, P5/P50/P95 (O, 3, M) and minimum (O, M), mm.
-    failures: reason -> count.  first_order: None without sensitivities.  design: None without search.
+    failures: the failed samples grouped by cause (FailureCause, most frequent first).  first_order: None without sensitivities.  design: None without search.
     notes: what a reader must know (unbalanced design, disagreement, failures).  run: figures of the run.
     """
 
@@ -128,7 +151,7 @@ class StudyOutcome:
     envelopes: list[dict[str, np.ndarray]]
     deviation: dict[str, np.ndarray]
     clearance: dict[str, np.ndarray]
-    failures: dict[str, int]
+    failures: list[FailureCause]
     first_order: FirstOrder | None = None
     design: DesignOutcome | None = None
     notes: list[str] = field(default_factory=list)
@@ -152,7 +175,7 @@ def summarize(study: Study, samples: dict[str, np.ndarray] | None, nominal: np.n
     quantities and centrelines, and (optionally) the sensitivities."""
     coordinates = study.coordinates()
     if samples is None:
-        return StudyOutcome(study, {}, coordinates, nominal, nominal_centerlines, [], [], [], [], {}, {}, {})
+        return StudyOutcome(study, {}, coordinates, nominal, nominal_centerlines, [], [], [], [], {}, {}, [])
     if not np.array_equal(samples["index"], np.arange(len(coordinates))):
         raise ValueError("the samples do not cover the study: some batches are missing or repeated")
     values = samples["values"]
@@ -178,15 +201,15 @@ def summarize(study: Study, samples: dict[str, np.ndarray] | None, nominal: np.n
                    "maximum": deviation.max(axis=0) if solved.any() else None},
         clearance={"percentiles": np.moveaxis(np.percentile(clearance, PERCENTILES, axis=0), 0, 1)
                    if solved.any() else None, "minimum": clearance.min(axis=0) if solved.any() else None},
-        failures=dict(Counter(str(r) for r in samples["reason"][samples["failed"]])),
+        failures=failure_causes(samples["reason"], samples["failed"]),
     )
     if not balanced(study.sampling.method, study.sampling.count):
         outcome.notes.append(f"a Sobol design of {study.sampling.count} samples is not a power of two: its balance "
                              "is lost (the estimates are still unbiased, but less precise than they could be)")
     failed = int(samples["failed"].sum())
     if failed:
-        outcome.notes.append(f"{failed} of {len(coordinates)} samples failed; they are listed in samples.csv with "
-                             "their reasons and left out of the spreads (the probabilities give an upper end "
+        outcome.notes.append(f"{failed} of {len(coordinates)} samples failed ({len(outcome.failures)} cause(s)); they "
+                             "are listed in samples.csv with their reasons and left out of the spreads (the probabilities give an upper end "
                              "counting them as broken)")
     outcome.notes.extend(_warm_start_notes(samples, study.base.problem.hose.length))
     if sensitivities is not None and solved.sum() >= 4:

@@ -22,8 +22,11 @@ and, after them, five per clip of the problem (coordinate_names(clips)), in the 
 A Tolerance maps its own dimensions of a point u of the unit hypercube onto some coordinates
 by the inverse distribution function, so one code serves Monte Carlo and space-filling designs
 alike; several tolerances on one parameter add up (a length tolerance and the change under
-pressure).  Each also knows the mean and covariance of what it adds, for the first-order
-variance (sensitivity.py).
+pressure).  A tolerance shared with other parameters of its kind (`shared_with`: a shared
+contributor, e.g. the subframe both mounts sit on) adds the same deviation to each of them, so
+they move together: their deviations are correlated, and Variation.covariance has the cross
+terms.  Each also knows the mean and covariance of what it adds, for the first-order variance
+(sensitivity.py).
 """
 
 from __future__ import annotations
@@ -101,7 +104,8 @@ DISTRIBUTIONS = {
     "point": {"normal": ("sigma_x", "sigma_y", "sigma_z"), "uniform": ("tolerance_x", "tolerance_y", "tolerance_z"),
               "sphere": ("radius",)},
     "tilt": {"cone": ("angle",), "normal": ("sigma",)},
-    "offset": {"normal": ("sigma",), "uniform": ("low", "high")},
+    "offset": {"normal": ("sigma",), "uniform": ("low", "high"), "triangular": ("low", "mode", "high"),
+               "truncnormal": ("mean", "sigma", "low", "high")},
     "factor": {"lognormal": ("factor",), "loguniform": ("factor",), "uniform": ("low", "high")},
 }
 
@@ -121,13 +125,23 @@ class Tolerance:
     normal: sigma.  uniform: offsets in [low, high], or +-tolerance per axis for a point, or a
     factor in [low, high].  sphere: uniform in a ball of the radius.  cone: the direction
     uniform over the spherical cap of the half angle.  lognormal: 95 % of the factors within
-    [1/factor, factor].  loguniform: ln(factor) uniform within +-ln(factor).
+    [1/factor, factor].  loguniform: ln(factor) uniform within +-ln(factor).  triangular (offsets):
+    the density rising linearly from low to mode and falling to high.  truncnormal (offsets): a normal
+    of the mean (a process offset) and sigma, cut to [low, high].
+
+    shared_with: other parameters of the same kind and unit that the same deviation moves (a
+    shared contributor: e.g. "end.point" and "clips[0].point" with "start.point" for a subframe
+    carrying all three; "hose.mass_per_length" with "hose.bending_stiffness" for a hose batch).
+    axes: for a point, the world directions (3 orthonormal rows) of the axes its sizes are given along
+    (fitting_axes: a fitting's two radial axes and its axis); empty: the world axes x, y, z.
     """
 
     parameter: str
     distribution: str
     size: tuple[float, ...]
     label: str = ""
+    shared_with: tuple[str, ...] = ()
+    axes: tuple[tuple[float, ...], ...] = ()
 
     def __post_init__(self) -> None:
         kind = self.kind  # raises for an unknown parameter
@@ -138,19 +152,58 @@ class Tolerance:
         size = tuple(float(v) for v in self.size)
         if len(size) != len(names) or not all(math.isfinite(v) for v in size):
             raise ValueError(f"{self.parameter}: {self.distribution} needs {', '.join(names)}, finite numbers")
-        if self.distribution == "uniform":
-            if kind in ("offset", "factor") and not size[0] < size[1]:
+        if self.distribution == "uniform" and kind in ("offset", "factor"):
+            if not size[0] < size[1]:
                 raise ValueError(f"{self.parameter}: uniform range [{size[0]:g}, {size[1]:g}] must have low < high")
             if kind == "factor" and size[0] <= 0.0:
                 raise ValueError(f"{self.parameter}: a factor range must stay positive, got low = {size[0]:g}")
+        elif self.distribution == "triangular":
+            if not size[0] <= size[1] <= size[2] or not size[0] < size[2]:
+                raise ValueError(f"{self.parameter}: triangular low = {size[0]:g}, mode = {size[1]:g}, high = "
+                                 f"{size[2]:g}: need low <= mode <= high and low < high")
+        elif self.distribution == "truncnormal":
+            if not size[1] > 0.0 or not size[2] < size[3]:
+                raise ValueError(f"{self.parameter}: truncnormal sigma = {size[1]:g}, range [{size[2]:g}, {size[3]:g}]: "
+                                 "need sigma > 0 and low < high")
         elif self.distribution in ("lognormal", "loguniform"):
             if not size[0] > 1.0:
                 raise ValueError(f"{self.parameter}: factor = {size[0]:g} must be above 1 (e.g. 2 for a factor of two)")
-        elif self.distribution == "cone" and not 0.0 < size[0] < 90.0:
-            raise ValueError(f"{self.parameter}: cone angle = {size[0]:g} must lie in (0, 90) degrees")
-        elif any(v < 0.0 for v in size) or max(size) == 0.0:
-            raise ValueError(f"{self.parameter}: {', '.join(names)} must be zero or positive, not all zero")
+        elif self.distribution == "cone":
+            if not 0.0 < size[0] < 90.0:
+                raise ValueError(f"{self.parameter}: cone angle = {size[0]:g} must lie in (0, 90) degrees")
+        elif any(v < 0.0 for v in size) or max(size) == 0.0:  # the spreads: sigma, +-tolerance, radius
+            given = ", ".join(f"{name} = {value:g}" for name, value in zip(names, size))
+            raise ValueError(f"{self.parameter}: {self.distribution} {given}: each must be zero or positive, and not "
+                             "all zero (a tolerance of zero everywhere varies nothing: remove the entry)")
         object.__setattr__(self, "size", size)
+        shared = tuple(self.shared_with)
+        if len(set(shared) | {self.parameter}) != len(shared) + 1:
+            raise ValueError(f"{self.parameter}: shared_with = {list(shared)} lists a parameter twice, or the parameter "
+                             "itself")
+        units = _units(self.parameter)
+        for other in shared:
+            other_kind = parameter_kind(other)[0]  # raises for an unknown parameter
+            if other_kind != kind or _units(other) != units:
+                raise ValueError(f"{self.parameter}: shared_with {other}: a shared deviation moves parameters of one "
+                                 f"kind and unit ({kind}, {', '.join(sorted(set(units)))}), {other} is "
+                                 f"{other_kind} in {', '.join(sorted(set(_units(other))))}")
+        object.__setattr__(self, "shared_with", shared)
+        axes = tuple(tuple(float(v) for v in row) for row in self.axes)
+        if axes:
+            matrix = np.array(axes)
+            if kind != "point" or matrix.shape != (3, 3) or not np.allclose(matrix @ matrix.T, np.eye(3), atol=1e-9):
+                raise ValueError(f"{self.parameter}: axes must be three orthonormal rows, and only for a point")
+        object.__setattr__(self, "axes", axes)
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The parameter and those it is shared with."""
+        return (self.parameter, *self.shared_with)
+
+    @property
+    def targets(self) -> tuple[tuple[int, ...], ...]:
+        """Per parameter moved (parameters), the indexes into coordinate_names(clips) its deviation adds to."""
+        return tuple(parameter_kind(parameter)[1] for parameter in self.parameters)
 
     @property
     def kind(self) -> str:
@@ -170,10 +223,28 @@ class Tolerance:
     @property
     def name(self) -> str:
         """The label, or parameter and distribution."""
-        return self.label or f"{self.parameter} ({self.distribution})"
+        return self.label or f"{' + '.join(self.parameters)} ({self.distribution}{', shared' if self.shared_with else ''})"
 
     def values(self, unit: np.ndarray) -> np.ndarray:
-        """(n, len(coordinates)) coordinate values of (n, dimensions) unit points in (0, 1)."""
+        """(n, len(coordinates)) coordinate values of (n, dimensions) unit points in (0, 1) (in the world axes)."""
+        values = self._along_axes(unit)
+        return values @ np.array(self.axes) if self.axes else values
+
+    def mean(self) -> np.ndarray:
+        """(len(coordinates),) mean of what it adds (in the world axes)."""
+        mean = self._mean_along_axes()
+        return mean @ np.array(self.axes) if self.axes else mean
+
+    def covariance(self) -> np.ndarray:
+        """(k, k) covariance of what it adds (k = len(coordinates); in the world axes)."""
+        covariance = self._covariance_along_axes()
+        if not self.axes:
+            return covariance
+        axes = np.array(self.axes)
+        return axes.T @ covariance @ axes
+
+    def _along_axes(self, unit: np.ndarray) -> np.ndarray:
+        """values() along the tolerance's own axes."""
         u = np.clip(np.asarray(unit, dtype=float), _EDGE, 1.0 - _EDGE)
         size = np.array(self.size)
         if self.distribution == "normal":
@@ -196,19 +267,30 @@ class Tolerance:
             return angle[:, None] * np.column_stack([np.cos(azimuth), np.sin(azimuth)])
         if self.distribution == "lognormal":
             return math.log(size[0]) / Z95 * ndtri(u)
+        if self.distribution == "triangular":
+            low, mode, high = size
+            rising = u < (mode - low) / (high - low)
+            return np.where(rising, low + np.sqrt(u * (high - low) * (mode - low)),
+                            high - np.sqrt((1.0 - u) * (high - low) * (high - mode)))
+        if self.distribution == "truncnormal":
+            return _truncated(size).ppf(u)
         return math.log(size[0]) * (2.0 * u - 1.0)  # loguniform
 
-    def mean(self) -> np.ndarray:
-        """(len(coordinates),) mean of what it adds."""
+    def _mean_along_axes(self) -> np.ndarray:
+        """mean() along the tolerance's own axes."""
         if self.distribution == "uniform" and self.kind == "offset":
             return np.array([0.5 * sum(self.size)])
         if self.distribution == "uniform" and self.kind == "factor":
             low, high = self.size
             return np.array([(high * math.log(high) - high - low * math.log(low) + low) / (high - low)])
+        if self.distribution == "triangular":
+            return np.array([sum(self.size) / 3.0])
+        if self.distribution == "truncnormal":
+            return np.array([float(_truncated(self.size).mean())])
         return np.zeros(len(self.coordinates))
 
-    def covariance(self) -> np.ndarray:
-        """(k, k) covariance of what it adds (k = len(coordinates)); the components are uncorrelated."""
+    def _covariance_along_axes(self) -> np.ndarray:
+        """covariance() along the tolerance's own axes: the components are uncorrelated there."""
         size = np.array(self.size)
         k = len(self.coordinates)
         if self.distribution == "normal":
@@ -230,7 +312,27 @@ class Tolerance:
             return np.eye(2) * math.degrees(1.0) ** 2 * second / 2.0
         if self.distribution == "lognormal":
             return np.array([[(math.log(size[0]) / Z95) ** 2]])
+        if self.distribution == "triangular":
+            low, mode, high = size
+            return np.array([[(low**2 + mode**2 + high**2 - low * mode - low * high - mode * high) / 18.0]])
+        if self.distribution == "truncnormal":
+            return np.array([[float(_truncated(self.size).var())]])
         return np.array([[math.log(size[0]) ** 2 / 3.0]])  # loguniform
+
+
+def _truncated(size: tuple[float, ...]):
+    """scipy.stats' frozen truncated normal of a truncnormal tolerance's size (mean, sigma, low, high)."""
+    from scipy.stats import truncnorm  # here: the workers, which never draw, need not import scipy.stats
+
+    mean, sigma, low, high = size
+    return truncnorm((low - mean) / sigma, (high - mean) / sigma, loc=mean, scale=sigma)
+
+
+def _units(parameter: str) -> tuple[str, ...]:
+    """The units of the coordinates a parameter moves."""
+    clip = clip_index(parameter)
+    units = coordinate_units(0 if clip is None else clip + 1)
+    return tuple(units[k] for k in parameter_kind(parameter)[1])
 
 
 def _integral_log_squared(x: float) -> float:
@@ -251,9 +353,10 @@ class Variation:
 
     def __post_init__(self) -> None:
         for tolerance in self.tolerances:
-            k = clip_index(tolerance.parameter)
-            if k is not None and k >= self.clips:
-                raise ValueError(f"{tolerance.parameter}: the problem has {self.clips} clip(s), numbered from 0")
+            for parameter in tolerance.parameters:
+                k = clip_index(parameter)
+                if k is not None and k >= self.clips:
+                    raise ValueError(f"{parameter}: the problem has {self.clips} clip(s), numbered from 0")
 
     @property
     def width(self) -> int:
@@ -278,7 +381,7 @@ class Variation:
     @property
     def varied(self) -> tuple[int, ...]:
         """Indexes of the canonical coordinates some tolerance moves, in COORDINATES order."""
-        return tuple(sorted({k for t in self.tolerances for k in t.coordinates}))
+        return tuple(sorted({k for t in self.tolerances for target in t.targets for k in target}))
 
     def coordinates(self, unit: np.ndarray) -> np.ndarray:
         """(n, width) deviations of the hoses at unit points (n, dimensions)."""
@@ -286,8 +389,9 @@ class Variation:
         out = np.zeros((unit.shape[0], self.width))
         column = 0
         for tolerance in self.tolerances:
-            values = tolerance.values(unit[:, column:column + tolerance.dimensions])
-            out[:, list(tolerance.coordinates)] += values.reshape(unit.shape[0], -1)
+            values = tolerance.values(unit[:, column:column + tolerance.dimensions]).reshape(unit.shape[0], -1)
+            for target in tolerance.targets:
+                out[:, list(target)] += values
             column += tolerance.dimensions
         return out
 
@@ -295,21 +399,33 @@ class Variation:
         """(width,) mean deviation."""
         out = np.zeros(self.width)
         for tolerance in self.tolerances:
-            out[list(tolerance.coordinates)] += tolerance.mean()
+            for target in tolerance.targets:
+                out[list(target)] += tolerance.mean()
         return out
 
     def covariance(self) -> np.ndarray:
-        """(width, width) covariance of the deviations (tolerances independent)."""
+        """(width, width) covariance of the deviations (tolerances independent of each other; a shared one gives the
+        same block between every two parameters it moves)."""
         out = np.zeros((self.width, self.width))
         for tolerance in self.tolerances:
-            index = np.array(tolerance.coordinates)
-            out[np.ix_(index, index)] += tolerance.covariance()
+            covariance = tolerance.covariance()
+            for first in tolerance.targets:
+                for second in tolerance.targets:
+                    out[np.ix_(first, second)] += covariance
         return out
 
 
 def tilt_axes(direction: np.ndarray) -> np.ndarray:
     """(2, 3) the axes a, b a fitting direction is tilted about (unit, perpendicular to it and each other)."""
     return frame_from_tangent(direction)[:2]
+
+
+def fitting_axes(direction: np.ndarray) -> tuple[tuple[float, ...], ...]:
+    """The axes of a point tolerance in a fitting's frame: its two radial axes a, b (tilt_axes) and its axis (the
+    unit direction), as Tolerance.axes rows."""
+    direction = np.asarray(direction, dtype=float)
+    rows = np.vstack([tilt_axes(direction), direction / np.linalg.norm(direction)])
+    return tuple(tuple(float(v) for v in row) for row in rows)
 
 
 def _tilted(mount: Mount, offset: np.ndarray, tilt_deg: np.ndarray) -> Mount:
