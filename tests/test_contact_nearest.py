@@ -4,11 +4,11 @@ obstacle than the hose, and a plane nearest at the start station, against hand-c
 import numpy as np
 import pytest
 
-from hoseline.model.fittings import Fitting, fitted_problem
+from hoseline.model.fittings import Fitting
 from hoseline.model.hose import Hose
 from hoseline.model.mounts import Mount
 from hoseline.model.obstacles import Plane, Sphere
-from hoseline.model.problem import Problem
+from hoseline.model.problem import Problem, fitted_problem
 from hoseline.procedures.placement.sequence import solve
 
 HOSE = Hose(length=300.0, outer_diameter=10.0, bending_stiffness=1e5, torsional_stiffness=1e5, segments=60)

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hoseline.model.problem import Problem
+from hoseline.procedures.placement.orientation import orientation_angle_deg
 
 
 @dataclass(frozen=True)
@@ -286,6 +287,9 @@ class Result:
                                 "obstacles": [contact.summary() for contact in self.contacts],
                                 "placement": [choice.summary() for choice in self.obstacle_placement]}
         clips |= fittings_summary(self.problem)
+        orientation = orientation_angle_deg(self.problem, self.start_frame, self.end_frame)
+        if orientation is not None:
+            clips["elbow_orientation_angle_deg"] = orientation
         return {
             "name": self.problem.name,
             "length_mm": self.problem.hose.length,
