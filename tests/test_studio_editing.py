@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from test_studio_browser import CHROMIUM, CHROMIUM_ARGS, drawn_after, opened_page
+from test_studio_browser import CHROMIUM, browser, drawn_after, opened_page  # noqa: F401 (browser: a fixture)
 from test_studio_contact import resting_hose
 from test_studio_server import clipped_thesis_problem
 from hoseline.demos.thesis_hose import demo_problem
@@ -29,17 +29,6 @@ from hoseline.studio.session import Session
 SAVED_TO_SHOWN_MM = 0.1  # the bound between the shape shown and the saved file solved
 
 pytestmark = pytest.mark.skipif(not Path(CHROMIUM).exists(), reason=f"{CHROMIUM} is not installed")
-
-
-@pytest.fixture(scope="module")
-def browser():
-    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
-    with sync_api.sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
-        try:
-            yield launched
-        finally:
-            launched.close()
 
 
 def thesis_problem():
