@@ -28,7 +28,9 @@ export class FittingsView {
     this.gizmo.setSpace('local');
     this.gizmo.setSize(0.8);
     studioScene.scene.add(this.gizmo.getHelper());
-    this.gizmo.addEventListener('change', () => studioScene.render());
+    // the gizmo tells 'change' before 'objectChange': the frame is only asked for here, so that the drag's
+    // target is sent (objectChange) before anything is drawn
+    this.gizmo.addEventListener('change', () => studioScene.requestRender());
     this.gizmo.addEventListener('dragging-changed', (event) => {
       studioScene.orbit.enabled = !event.value;
       this.dragging = event.value;
@@ -124,7 +126,7 @@ export class FittingsView {
     if (mode) this.gizmo.setMode(mode);
     this.selected = name;
     if (name) this.gizmo.attach(this.objects[name]); else this.gizmo.detach();
-    this.studioScene.render();
+    this.studioScene.requestRender();
   }
 
   /** Move fitting `name` by `offset` (mm, world) and turn it by `degrees` about its own `axis` (0 x, 1 y, 2 z),

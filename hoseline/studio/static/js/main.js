@@ -2,6 +2,7 @@
 // window.studio exposes the state drawn and a promise per seq, for the tests and the benchmark.
 import * as THREE from 'three';
 import { Connection } from './connection.js';
+import { marks } from './marks.js';
 import { stationColours } from './colormaps.js';
 import { StudioScene } from './scene.js';
 import { HoseView } from './hose.js';
@@ -33,8 +34,9 @@ const panel = new Panel({
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
 
+/** Send a message: a target ('set') waits while another is in flight (Connection.sendTarget). */
 function send(message) {
-  return connection.send(message);
+  return message.type === 'set' ? connection.sendTarget(message) : connection.send(message);
 }
 
 function receive(message) {
@@ -63,19 +65,24 @@ function draw(message) {
   paint();
   fittings.shapeEnds(message.pieces);
   obstacles.place(message.obstacle_poses);
-  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq) fittings.place(message.fittings, message.clips);
-  if (starting) { fitView(); starting = false; }
-  studioScene.render();
-  const drawnAt = performance.now();
-  if (message.seq !== null) {
-    for (const sentAt of connection.takeUpTo(message.seq)) latencies.push(drawnAt - sentAt);
-    for (let k = drawnWaiters.length - 1; k >= 0; k--) {
-      if (drawnWaiters[k][0] <= message.seq) { drawnWaiters[k][1](drawnAt); drawnWaiters.splice(k, 1); }
-    }
+  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq && !connection.pending) {
+    fittings.place(message.fittings, message.clips);
   }
+  if (starting) { fitView(); starting = false; }
+  studioScene.requestRender((drawnAt) => drawn(message.seq, drawnAt));
   for (const event of (message.step && message.step.events) || []) panel.message(event);
   showSoon(message);
   if (playing && message.seq === connection.seq) send({ type: 'set', pose: nextPose() });
+}
+
+/** The frame that draws the state answering `seq` was drawn at `drawnAt` (performance.now()). */
+function drawn(seq, drawnAt) {
+  if (seq === null) return;
+  marks.add('drawn', seq, drawnAt);
+  for (const sentAt of connection.takeUpTo(seq)) latencies.push(drawnAt - sentAt);
+  for (let k = drawnWaiters.length - 1; k >= 0; k--) {
+    if (drawnWaiters[k][0] <= seq) { drawnWaiters[k][1](drawnAt); drawnWaiters.splice(k, 1); }
+  }
 }
 
 /** Show a state's numbers in the panel at the next animation frame: during a drag the page's layout
@@ -175,7 +182,7 @@ window.addEventListener('keydown', (event) => {
   else if (event.key === 'Escape') fittings.select(null);
   markActive();
 });
-document.getElementById('colour-map').addEventListener('change', () => { if (state) { paint(); studioScene.render(); } });
+document.getElementById('colour-map').addEventListener('change', () => { if (state) { paint(); studioScene.requestRender(); } });
 
 // a click on a fitting selects it for the gizmo
 const raycaster = new THREE.Raycaster();
@@ -210,4 +217,6 @@ window.studio = {
   get receivedAt() { return connection.receivedAt; },
   /** The seq of the last message sent. */
   get seq() { return connection.seq; },
+  /** Timestamps of targets sent, states received and frames drawn, for the benchmark (marks.js). */
+  marks,
 };
