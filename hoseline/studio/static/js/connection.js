@@ -18,7 +18,7 @@ export class Connection {
       this.receivedAt = performance.now();
       const message = JSON.parse(event.data);
       if (message.type === 'state') {
-        marks.add('received', message.seq, this.receivedAt);
+        marks.add('received', message.seq, this.receivedAt, message.server_seconds);
         if (this.inFlight !== null && message.seq !== null && message.seq >= this.inFlight) {
           this.inFlight = null;
           this._sendPending();  // before the state is drawn: the server works while the page draws

@@ -43,6 +43,7 @@ export class StudioScene {
     this.drawCount = 0;
     this.dirty = false;
     this.drawnCallbacks = [];  // called with performance.now() once the next frame is drawn
+    this.later = null;  // the timer of requestRenderAfter
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
   }
@@ -60,9 +61,16 @@ export class StudioScene {
    * called when that frame has been drawn. */
   requestRender(then) {
     if (then) this.drawnCallbacks.push(then);
+    clearTimeout(this.later);
+    this.later = null;
     if (this.dirty) return;
     this.dirty = true;
     requestAnimationFrame(() => this.render());
+  }
+
+  /** Draw in `ms` milliseconds, unless a frame is asked for before then (which draws this change too). */
+  requestRenderAfter(ms) {
+    if (this.later === null && !this.dirty) this.later = setTimeout(() => this.requestRender(), ms);
   }
 
   /** Draw now, and call the callbacks waiting for a frame. */
