@@ -46,11 +46,12 @@ function receive(message) {
     obstacles.load(message.obstacles).then(() => { if (state) fitView(); })
       .catch((error) => panel.message(String(error), true));
   } else if (message.type === 'state') {
+    panel.messages.carriedOut(message.seq);
     draw(message);
   } else if (message.type === 'comparison') {
     if (state) { state.comparison = message.comparison; showSoon(state); }
   } else if (message.type === 'error') {
-    panel.message(message.message, true);
+    panel.message(message.message, true, message.seq);
     playing = false;
   }
 }
