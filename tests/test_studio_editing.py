@@ -161,3 +161,42 @@ def test_a_box_without_a_finite_number_says_so(page, text):
     assert page.locator("#messages li.error").first.inner_text() == "Length, mm: must be a finite number"
     assert page.evaluate("() => window.studio.seq") == seq  # nothing sent
     assert box.input_value() == "185"
+
+
+def test_the_bending_stiffness_box_shows_its_whole_value(page):
+    box = page.locator('.slider[data-key="bending_stiffness"] input[type="number"]')
+    state = answered(page, lambda: type_into(page, box, "149563.02563205"))  # the thesis hose's EI, N*mm^2
+    assert state["hose"]["bending_stiffness"] == 149563.02563205
+    page.locator("#segments").click()  # away from the box
+    assert box.input_value() == "149563.025632"
+    width, room = box.evaluate("(box) => [box.scrollWidth, box.clientWidth]")
+    assert width <= room  # nothing cut off
+
+
+def test_place_again_shows_that_the_page_is_busy_until_the_hose_is_placed(page):
+    busy = page.locator("#busy")
+    assert busy.is_hidden()
+    shown = page.evaluate("""() => { document.getElementById('place-again').click();  // as the mouse clicks it
+        const busy = document.getElementById('busy'); return [busy.hidden, busy.textContent]; }""")
+    assert shown == [False, "placing the hose again"]
+    busy.wait_for(state="hidden", timeout=20000)
+    assert page.evaluate("() => window.studio.state.seq === window.studio.seq")
+
+
+def test_fit_and_iso_frame_the_hose_not_the_contact_plane(browser, tmp_path):  # noqa: F811
+    from tests.test_studio_contact import resting_hose
+
+    with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
+        page.wait_for_function("() => window.studio.scene.bounds")
+        for view in ("iso", "fit"):
+            page.click(f'[data-view="{view}"]')
+            width, height = page.evaluate("""() => {  // the hose's extent on the screen, as fractions of the view
+                const studio = window.studio, box = studio.hose.bounds(), camera = studio.scene.camera;
+                const xs = [], ys = [];
+                for (const x of [box.min.x, box.max.x]) for (const y of [box.min.y, box.max.y]) for (const z of [box.min.z, box.max.z]) {
+                    const p = box.min.clone().set(x, y, z).project(camera); xs.push(p.x); ys.push(p.y);
+                }
+                return [(Math.max(...xs) - Math.min(...xs)) / 2, (Math.max(...ys) - Math.min(...ys)) / 2];
+            }""")
+            assert max(width, height) > 0.45, (view, width, height)  # the floor is 1600 mm wide, the hose 300 mm
+        assert errors == []

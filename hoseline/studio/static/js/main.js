@@ -9,6 +9,7 @@ import { HoseView } from './hose.js';
 import { ObstacleView } from './obstacles.js';
 import { FittingsView } from './fittings.js';
 import { Panel } from './panel.js';
+import { Busy } from './busy.js';
 
 const view = document.getElementById('view');
 const studioScene = new StudioScene(view);
@@ -25,12 +26,13 @@ const panel = new Panel({
   typed: (name, field, values) => fittings.setTyped(name, field, values),
   pose: (index) => { playing = false; send({ type: 'set', pose: index }); },
   play: () => { playing = !playing; if (playing) send({ type: 'set', pose: nextPose() }); },
-  place: () => send({ type: 'place' }),
-  segments: (count) => send({ type: 'segments', segments: count }),
+  place: () => busyUntilDrawn('placing the hose again', send({ type: 'place' })),
+  segments: (count) => busyUntilDrawn('placing the hose again', send({ type: 'segments', segments: count })),
   clearance: (obstacle, required) => send({ type: 'clearance', obstacle, required }),
   files: (files) => upload([...files]),
   runSweep,
 });
+const busy = new Busy(document.querySelector('header'));
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
 
@@ -86,6 +88,12 @@ function drawn(seq, drawnAt) {
   }
 }
 
+/** Show `text` in the busy indicator until the state answering `seq` is drawn. */
+function busyUntilDrawn(text, seq) {
+  const done = busy.start(text);
+  drawnWaiters.push([seq, done]);
+}
+
 /** Show a state's numbers in the panel at the next animation frame: during a drag the page's layout
  * is done at most once a frame, however many states arrive. */
 let shownSoon = null;
@@ -114,7 +122,7 @@ function nextPose() {
 }
 
 function fitView() {
-  const box = hose.bounds().union(obstacles.bounds());
+  const box = obstacles.boundsNear(hose.bounds());
   for (const object of Object.values(fittings.objects)) box.expandByPoint(object.position);
   studioScene.setGround(box);
   studioScene.view('iso');
@@ -133,6 +141,15 @@ function showLegend(legend) {
 
 /** Upload dropped or chosen files: with a .toml among them, the others are kept for it and it is opened last. */
 async function upload(files) {
+  const done = busy.start(`opening ${files.map((file) => file.name).join(', ')}`);
+  try {
+    await uploadInOrder(files);
+  } finally {
+    done();
+  }
+}
+
+async function uploadInOrder(files) {
   const main = files.filter((file) => file.name.toLowerCase().endsWith('.toml'));
   const ordered = main.length ? [...files.filter((file) => !main.includes(file)).map((file) => [file, true]), ...main.map((file) => [file, false])]
     : files.map((file) => [file, false]);
