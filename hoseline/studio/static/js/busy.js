@@ -1,11 +1,11 @@
-// A busy indicator in the header for the slow actions (placing the hose again, opening a file): it says what the
+// A busy indicator over the view for the slow actions (placing the hose again, opening a file): it says what the
 // page waits for, with a spinner and the progress cursor, until the answer comes.
 
 export class Busy {
-  /** header: the element the indicator is put in. */
-  constructor(header) {
+  /** container: the element the indicator is put in (over its top right corner). */
+  constructor(container) {
     this.element = Object.assign(document.createElement('span'), { id: 'busy', hidden: true });
-    header.append(this.element);
+    container.append(this.element);
     this.waiting = new Map();  // key -> what is waited for
     this.next = 0;
   }

@@ -32,7 +32,7 @@ const panel = new Panel({
   files: (files) => upload([...files]),
   runSweep,
 });
-const busy = new Busy(document.querySelector('header'));
+const busy = new Busy(view);
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
 
