@@ -94,16 +94,19 @@ function busyUntilDrawn(text, seq) {
   drawnWaiters.push([seq, done]);
 }
 
-/** Show a state's numbers in the panel at the next animation frame: during a drag the page's layout
- * is done at most once a frame, however many states arrive. */
-let shownSoon = null;
+/** Show a state's numbers in the panel at an animation frame at least PANEL_MS after the last time: during a drag
+ * the panel's layout and painting (the CPU's, without a GPU) are done 10 times a second, however many states
+ * arrive, and the last state is always shown. */
+const PANEL_MS = 100;
+let shownSoon = null, shownAt = -Infinity;
 function showSoon(message) {
   if (shownSoon === null) {
-    requestAnimationFrame(() => {
+    setTimeout(() => requestAnimationFrame(() => {
       panel.show(shownSoon);
       panel.badge(shownSoon.comparison);
       shownSoon = null;
-    });
+      shownAt = performance.now();
+    }), Math.max(0, shownAt + PANEL_MS - performance.now()));
   }
   shownSoon = message;
 }
