@@ -170,8 +170,10 @@ def timings(taken: dict) -> dict:
             lags.append(at - max(shown))
     last_moved, last_seq = carried[-1]
     server = [1000 * detail for what, _, _, detail in marks if what == "received" and detail is not None]
+    moves = taken["moves"]
     return {"sent": to_sent, "received": to_received, "drawn": to_drawn, "lag": lags, "last": first(drawn, last_seq) - last_moved,
-            "server": server, "moves": len(carried), "targets": len(sent), "frames": len(drawn)}
+            "server": server, "moves": len(carried), "targets": len(sent), "frames": len(drawn),
+            "rate": 1000.0 * (len(moves) - 1) / (moves[-1] - moves[0])}
 
 
 def figures(values: list[float]) -> str:
@@ -202,11 +204,12 @@ def measure(session: Session, work: Path, moves: int, playwright) -> None:
     print(f"    pointermove to state received  {figures(single['received'])}")
     print(f"    pointermove to shape drawn     {figures(single['drawn'])}")
     print(f"    in the solver thread           {figures(single['server'])}")
-    print(f"  at 60 Hz ({steady['moves']} moves, {steady['targets']} targets sent, {steady['frames']} frames drawn):")
+    print(f"  at 60 Hz ({steady['moves']} moves, {steady['rate']:.0f} a second as the page saw them, "
+          f"{steady['targets']} targets sent, {steady['frames']} frames drawn):")
     print(f"    pointermove to state received  {figures(steady['received'])}")
     print(f"    pointermove to shape drawn     {figures(steady['drawn'])}")
     print(f"    lag of the position drawn      {figures(steady['lag'])}; the last move drawn after {steady['last']:.1f} ms")
-    print(f"    in the solver thread           {figures(steady['server'])}")
+    print(f"    in the solver thread           {figures(steady['server'])}, longest {max(steady['server']):.0f} ms")
     print(f"  empty round trip (transport)     {figures(empty)}")
     print(f"  load average (1 min) {load_before:.2f} before, {load_after:.2f} after, on {os.cpu_count()} cores")
 
