@@ -15,6 +15,7 @@ const view = document.getElementById('view');
 const studioScene = new StudioScene(view);
 const hose = new HoseView(studioScene.scene);
 const obstacles = new ObstacleView(studioScene.scene);
+studioScene.keepDrawn(obstacles.group);
 const fittings = new FittingsView(studioScene, (name, object) => send(name.startsWith('clip')
   ? { type: 'set', clips: fittings.clipTargets() } : { type: 'set', [name]: FittingsView.target(object) }));
 let session = null, state = null, starting = true, playing = false;
@@ -45,7 +46,7 @@ function receive(message) {
   if (message.type === 'session') {
     session = message;
     starting = true;
-    obstacles.load(message.obstacles).then(() => { if (state) fitView(); })
+    obstacles.load(message.obstacles).then(() => { studioScene.forgetLayer(); if (state) fitView(); })
       .catch((error) => panel.message(String(error), true));
   } else if (message.type === 'state') {
     panel.messages.carriedOut(message.seq);

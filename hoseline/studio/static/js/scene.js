@@ -4,6 +4,7 @@
 // came before it (a drag's events, the states answering them, the orbit's moves).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { StaticLayer } from './static_layer.js';
 
 const PRESETS = {
   iso: new THREE.Vector3(1, -1, 0.8),
@@ -76,11 +77,23 @@ export class StudioScene {
   /** Draw now, and call the callbacks waiting for a frame. */
   render() {
     this.dirty = false;
-    this.renderer.render(this.scene, this.camera);
+    if (this.layer) this.layer.render(this.renderer, this.scene, this.camera);
+    else this.renderer.render(this.scene, this.camera);
     this.drawCount += 1;
     const drawnAt = performance.now(), callbacks = this.drawnCallbacks;
     this.drawnCallbacks = [];
     for (const then of callbacks) then(drawnAt);
+  }
+
+  /** Draw `group` (of this scene; objects that stay put during a drag: the obstacles) into a layer kept between
+   * frames (static_layer.js); its objects are seen to move by their matrices; forgetLayer() after any other change. */
+  keepDrawn(group) {
+    this.layer = new StaticLayer(group);
+  }
+
+  forgetLayer() {
+    this.layer?.forget();
+    this.requestRender();
   }
 
   /** A ground grid below `box` (THREE.Box3, mm) and axes at the origin, sized to it. */
