@@ -3,13 +3,15 @@
     python bench/bench_studio.py [--moves 150] [--no-contact]
 
 The thesis hose (100 segments, 180 degrees of twist) in the studio, served on 127.0.0.1 and open in Debian's
-headless chromium (software WebGL, no GPU) through Playwright.  The mouse (page.mouse: input events that go
-through the browser as a user's do) takes the end fitting's gizmo by one of its arrows and drags it to and fro
-along it, 1 mm a move, first one move at a time (the next 100 ms after the last one's frame) and then at 60 Hz
-(a move every 1/60 s, as a steady hand drags).  Timed in the page with performance.now(): each pointermove (a
-capture listener on the window) and the page's marks (static/js/marks.js) of every target sent, state received
-and frame drawn.  A move's position goes out with the first target sent after it (at once, or merged into the
-next while one is in flight), so for each move:
+headless chromium (software WebGL, no GPU) through Playwright (its async API, so that the moves at 60 Hz go out
+on their ticks).  The mouse (page.mouse: input events that go through the browser as a user's do) takes the end
+fitting's gizmo by one of its arrows and drags it to and fro along it, 1 mm a move, first one move at a time
+(the next 100 ms after the last one's frame) and then at 60 Hz (a move every 1/60 s, as a steady hand drags).
+Timed in the page with performance.now(): each pointermove (a capture listener on the window; chromium hands
+the page at most one a frame, holding the moves since the last in its coalesced events, each timed from when
+the browser took it in, its timeStamp) and the page's marks (static/js/marks.js) of every target sent, state
+received and frame drawn.  A move's position goes out with the first target sent after the page saw it (at
+once, or merged into the next while one is in flight), so for each move:
 
     state received  the first state answering that target or a later one, less the move's time;
     shape drawn     the animation frame that draws it (its render call returned), less the move's time;
@@ -27,6 +29,7 @@ lag at 60 Hz <= 50 ms.
 from __future__ import annotations
 
 import argparse
+import asyncio
 import os
 import sys
 import tempfile
@@ -53,11 +56,16 @@ CHROMIUM_ARGS = [
 AMPLITUDE_MM = 8  # the drag runs to and fro between -8 and +8 mm from where it took the arrow
 PAUSE_S = 0.1  # between the moves made one at a time
 
-# the timestamps: every pointermove (before the gizmo sees it) and the page's own marks
+# the timestamps: every mouse move the browser took in (chromium hands the page at most one pointermove a frame, the
+# moves since the last one in its coalesced events), when it took it in (the event's timeStamp) and when the page
+# saw it (before the gizmo does); and the page's own marks
 RECORD = """() => {
     window.benchMoves = [];
     window.studio.marks.list = [];
-    window.addEventListener('pointermove', () => window.benchMoves.push(performance.now()), { capture: true });
+    window.addEventListener('pointermove', (event) => {
+        const seen = performance.now(), coalesced = event.getCoalescedEvents();
+        for (const move of coalesced.length ? coalesced : [event]) window.benchMoves.push([move.timeStamp, seen]);
+    }, { capture: true });
 }"""
 FORGET = "() => { window.benchMoves.length = 0; window.studio.marks.list.length = 0; }"
 TAKE = "() => ({ moves: window.benchMoves.slice(), marks: window.studio.marks.list.slice() })"
@@ -102,15 +110,15 @@ EMPTY = """async (events) => {
 }"""
 
 
-def gizmo_arrow(page) -> tuple[list[float], list[float]]:
+async def gizmo_arrow(page) -> tuple[list[float], list[float]]:
     """A screen point where the mouse takes one of the end fitting's arrows, and the pixels per mm along it."""
-    page.click('[data-select="end"]')
-    page.click('[data-mode="translate"]')
+    await page.click('[data-select="end"]')
+    await page.click('[data-mode="translate"]')
     for axis in (0, 1):
         for length in (15, 20, 25, 30, 35, 40, 50):
-            point, per_mm = page.evaluate(ARROW, [axis, length])
-            page.mouse.move(*point)
-            if page.evaluate("() => window.studio.fittings.gizmo.axis") in ("X", "Y"):
+            point, per_mm = await page.evaluate(ARROW, [axis, length])
+            await page.mouse.move(*point)
+            if await page.evaluate("() => window.studio.fittings.gizmo.axis") in ("X", "Y"):
                 return point, per_mm
     raise RuntimeError("the mouse found no gizmo arrow on the end fitting")
 
@@ -123,25 +131,30 @@ def to_and_fro(moves: int) -> list[float]:
                                                               phases - period)).tolist()
 
 
-def drag(page, moves: int, rate_hz: float | None) -> dict:
-    """Drag the end fitting by the mouse: `moves` moves at `rate_hz` (None: one at a time); the page's timestamps."""
-    point, per_mm = gizmo_arrow(page)
-    page.wait_for_function("() => window.studio.state.comparison", timeout=60000)  # the idle comparison is done
-    page.mouse.down()
-    page.evaluate(FORGET)
-    started = time.perf_counter()
+async def drag(page, moves: int, rate_hz: float | None) -> dict:
+    """Drag the end fitting by the mouse: `moves` moves at `rate_hz` (None: one at a time); the page's timestamps.
+
+    At a rate, each move is sent on its tick without waiting for the browser to take the last one (chromium answers
+    an input event once it has handled it, at its next frame: waiting would pace the moves by the frames)."""
+    point, per_mm = await gizmo_arrow(page)
+    await page.wait_for_function("() => window.studio.state.comparison", timeout=60000)  # the idle comparison done
+    await page.mouse.down()
+    await page.evaluate(FORGET)
+    started, moving = time.perf_counter(), []
     for k, offset in enumerate(to_and_fro(moves)):
+        target = (point[0] + offset * per_mm[0], point[1] + offset * per_mm[1])
         if rate_hz is None:
-            sent = page.evaluate("() => window.studio.marks.list.filter((m) => m[0] === 'sent').length")
+            sent = await page.evaluate("() => window.studio.marks.list.filter((m) => m[0] === 'sent').length")
+            await page.mouse.move(*target)
+            await page.evaluate(DRAWN_AFTER, sent)
+            await asyncio.sleep(PAUSE_S)
         else:
-            time.sleep(max(0.0, started + k / rate_hz - time.perf_counter()))
-        page.mouse.move(point[0] + offset * per_mm[0], point[1] + offset * per_mm[1])
-        if rate_hz is None:
-            page.evaluate(DRAWN_AFTER, sent)
-            time.sleep(PAUSE_S)
-    page.evaluate(DRAWN_AFTER, 0)
-    taken = page.evaluate(TAKE)
-    page.mouse.up()
+            await asyncio.sleep(max(0.0, started + k / rate_hz - time.perf_counter()))
+            moving.append(asyncio.ensure_future(page.mouse.move(*target)))
+    await asyncio.gather(*moving)
+    await page.evaluate(DRAWN_AFTER, 0)
+    taken = await page.evaluate(TAKE)
+    await page.mouse.up()
     return taken
 
 
@@ -155,9 +168,9 @@ def timings(taken: dict) -> dict:
     def first(events, seq):
         return next((at for at, s in events if s >= seq), None)
 
-    carried = []  # (move time, seq of the target carrying it)
-    for moved in taken["moves"]:
-        seq = next((s for at, s in sent if at >= moved), None)
+    carried = []  # (when the browser took the move in, seq of the first target sent after the page saw it)
+    for moved, seen in taken["moves"]:
+        seq = next((s for at, s in sent if at >= seen), None)
         if seq is not None:
             carried.append((moved, seq))
     to_sent = [first(sent, seq) - moved for moved, seq in carried]
@@ -173,7 +186,8 @@ def timings(taken: dict) -> dict:
     moves = taken["moves"]
     return {"sent": to_sent, "received": to_received, "drawn": to_drawn, "lag": lags, "last": first(drawn, last_seq) - last_moved,
             "server": server, "moves": len(carried), "targets": len(sent), "frames": len(drawn),
-            "rate": 1000.0 * (len(moves) - 1) / (moves[-1] - moves[0])}
+            "rate": 1000.0 * (len(moves) - 1) / (moves[-1][0] - moves[0][0]),
+            "events": len({seen for _, seen in moves})}
 
 
 def figures(values: list[float]) -> str:
@@ -181,31 +195,31 @@ def figures(values: list[float]) -> str:
     return f"median {np.median(values):6.1f} ms, 95th percentile {np.percentile(values, 95):6.1f} ms"
 
 
-def measure(session: Session, work: Path, moves: int, playwright) -> None:
+async def measure(session: Session, work: Path, moves: int, playwright) -> None:
     """Print the figures of the drags one at a time and at 60 Hz on `session`, in a fresh browser."""
-    browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+    browser = await playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
     try:
         with in_background(session, work) as url:
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
-            page.goto(url)
-            page.wait_for_function("() => window.studio && window.studio.state !== null", timeout=60000)
-            page.wait_for_timeout(1000)  # the obstacles fetched and drawn
-            page.evaluate(RECORD)
-            drag(page, 20, 60.0)  # warm-up: compiled paths, shaders
+            page = await browser.new_page(viewport={"width": 1400, "height": 900})
+            await page.goto(url)
+            await page.wait_for_function("() => window.studio && window.studio.state !== null", timeout=60000)
+            await page.wait_for_timeout(1000)  # the obstacles fetched and drawn
+            await page.evaluate(RECORD)
+            await drag(page, 20, 60.0)  # warm-up: compiled paths, shaders
             load_before = os.getloadavg()[0]
-            single = timings(drag(page, moves, None))
-            steady = timings(drag(page, 3 * moves, 60.0))
-            empty = page.evaluate(EMPTY, 100)
+            single = timings(await drag(page, moves, None))
+            steady = timings(await drag(page, 3 * moves, 60.0))
+            empty = await page.evaluate(EMPTY, 100)
             load_after = os.getloadavg()[0]
     finally:
-        browser.close()
+        await browser.close()
     print(f"  one move at a time ({single['moves']} moves):")
     print(f"    pointermove to target sent     {figures(single['sent'])}")
     print(f"    pointermove to state received  {figures(single['received'])}")
     print(f"    pointermove to shape drawn     {figures(single['drawn'])}")
     print(f"    in the solver thread           {figures(single['server'])}")
-    print(f"  at 60 Hz ({steady['moves']} moves, {steady['rate']:.0f} a second as the page saw them, "
-          f"{steady['targets']} targets sent, {steady['frames']} frames drawn):")
+    print(f"  at 60 Hz ({steady['moves']} moves, {steady['rate']:.0f} a second as the browser took them in, in "
+          f"{steady['events']} pointermove events; {steady['targets']} targets sent, {steady['frames']} frames drawn):")
     print(f"    pointermove to state received  {figures(steady['received'])}")
     print(f"    pointermove to shape drawn     {figures(steady['drawn'])}")
     print(f"    lag of the position drawn      {figures(steady['lag'])}; the last move drawn after {steady['last']:.1f} ms")
@@ -214,12 +228,12 @@ def measure(session: Session, work: Path, moves: int, playwright) -> None:
     print(f"  load average (1 min) {load_before:.2f} before, {load_after:.2f} after, on {os.cpu_count()} cores")
 
 
-def main() -> None:
+async def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--moves", type=int, default=150, help="moves one at a time; three times as many at 60 Hz")
     parser.add_argument("--no-contact", action="store_true", help="skip the case with the strut in contact")
     options = parser.parse_args()
-    from playwright.sync_api import sync_playwright
+    from playwright.async_api import async_playwright
 
     cases = [("thesis hose, 100 segments, 180 deg of twist, no obstacle", lambda: demo_problem(180.0))]
     if not options.no_contact:
@@ -227,13 +241,14 @@ def main() -> None:
 
         cases.append(("the same with a fixed clip at station 50 and a strut of 100 000 triangles in contact, "
                       "self-contact on", lambda: strut_cases()[1]))
-    with sync_playwright() as playwright, tempfile.TemporaryDirectory() as work:
-        for number, (label, problem) in enumerate(cases):
-            print(f"\n{label}:", flush=True)
-            measure(Session(problem()), Path(work) / str(number), options.moves, playwright)
+    async with async_playwright() as playwright:
+        with tempfile.TemporaryDirectory() as work:
+            for number, (label, problem) in enumerate(cases):
+                print(f"\n{label}:", flush=True)
+                await measure(Session(problem()), Path(work) / str(number), options.moves, playwright)
     print("\ntargets: state received median <= 10 ms; shape drawn median <= 33 ms, 95th percentile <= 50 ms; "
           "lag at 60 Hz <= 50 ms")
 
 
 if __name__ == "__main__":
-    main()
+    asyncio.run(main())

@@ -6,7 +6,7 @@ import numpy as np
 
 from hoseline.demos.sweep import demo_sweep
 from hoseline.studio.session import Session
-from tests.test_studio_browser import CHROMIUM, browser, opened_page, pytestmark  # noqa: F401 (fixture, skip mark)
+from tests.test_studio_browser import browser, opened_page, pytestmark  # noqa: F401 (the fixture, the skip mark)
 
 # the canvas as drawn now, with the layer (or without: the obstacles drawn with the scene), as RGBA bytes
 CANVAS = """(layered) => {

@@ -13,7 +13,7 @@ import pytest
 
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.studio.session import Session
-from tests.test_studio_browser import CHROMIUM, browser, opened_page, pytestmark  # noqa: F401 (fixture, skip mark)
+from tests.test_studio_browser import browser, opened_page, pytestmark  # noqa: F401 (the fixture, the skip mark)
 
 LENGTH, SLACK = 185.0, 25.0  # mm: the hose, and the pull from the mounts to the mount distance
 PULLED_TAUT = "pulled nearly taut"

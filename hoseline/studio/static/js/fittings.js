@@ -39,6 +39,7 @@ export class FittingsView {
       studioScene.orbit.enabled = !event.value;
       this.dragging = event.value;
       if (!event.value && this.afterDrag) this.afterDrag();
+      studioScene.requestRender();
     });
     this.gizmo.addEventListener('objectChange', () => this.onDrag(this.selected, this.objects[this.selected]));
     this.dragging = false;
