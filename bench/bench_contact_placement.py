@@ -78,8 +78,11 @@ def strut(centre: np.ndarray, axis: np.ndarray, radius: float, length: float, ar
     return Mesh(vertices, faces, "strut")
 
 
-def mesh_case() -> None:
-    """The thesis hose with a fixed clip, without contact and with a 100 000-triangle strut and self-contact."""
+def strut_cases():
+    """The thesis hose (100 segments, 180 deg) with a fixed clip at station 50 (no contact), and pushed 1 mm aside at
+    station 25 by a strut of radius 15 mm meshed with 100 000 triangles, self-contact on; the same with the strut as
+    an analytic cylinder; the clipped hose's placement and the side (unit vector) the strut stands on.  Also the studio
+    benchmark's case with contact (bench_studio.py)."""
     plain = demo_problem(180.0, segments=100)
     free = solve(plain)
     h = plain.hose.segment_length
@@ -95,6 +98,13 @@ def mesh_case() -> None:
     obstacle = strut(centre, axis, radius, 200.0, 500, 100)
     touching = replace(clipped, contact=(obstacle,), self_contact=True)
     round_strut = replace(touching, contact=(Cylinder(centre - 100.0 * axis, centre + 100.0 * axis, radius, "strut"),))
+    return clipped, touching, round_strut, placed, side
+
+
+def mesh_case() -> None:
+    """The thesis hose with a fixed clip, without contact and with a 100 000-triangle strut and self-contact."""
+    clipped, touching, round_strut, placed, side = strut_cases()
+    plain, [obstacle] = demo_problem(180.0, segments=100), touching.contact
     print(f"thesis hose, 100 segments, 180 deg, fixed clip at station 50; strut of {obstacle.faces.shape[0]} triangles; "
           f"load average {os.getloadavg()[0]:.1f}")
     cases = [("clip, no contact", clipped), ("clip, cylinder, self-contact", round_strut),

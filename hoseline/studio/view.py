@@ -19,6 +19,7 @@ import numpy as np
 from hoseline.model.motion import matrix_quaternion
 from hoseline.procedures.geometry.clearance_profile import clearance_profile
 from hoseline.procedures.placement.result import Result
+from hoseline.studio.warnings import bend_limit, shape_warnings
 
 if TYPE_CHECKING:
     from hoseline.studio.session import Session
@@ -69,6 +70,8 @@ def state_message(session: "Session") -> dict:
         "readouts": {
             "min_clearance": nearest,
             "min_bend_radius": _finite_or_none(result.min_bend_radius),
+            "bend_limit": bend_limit(problem),
+            "warnings": shape_warnings(problem, result),
             "start_force": result.start_force.tolist(),
             "start_moment": result.start_moment.tolist(),
             "end_force": result.end_force.tolist(),

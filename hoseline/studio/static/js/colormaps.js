@@ -32,10 +32,9 @@ export function stationColours(name, state) {
     return { colours: Array(count).fill(GREEN), legend: { kind: 'ratio', title: 'no obstacles: drop an STL', low: '0', mid: '1', high: `≥ ${RATIO_TOP}` } };
   }
   if (name === 'bend') {
-    const limit = state.hose.min_bend_radius;
-    const reference = limit || 10 * state.hose.outer_diameter;
-    const title = limit ? `bend radius / minimum ${fmt(limit)} mm` : `bend radius / 10 OD (no minimum given)`;
-    return { colours: state.bend_radius.map((r) => ratioColour(r === null ? null : r / reference)), legend: { kind: 'ratio', title, low: '0', mid: '1', high: `≥ ${RATIO_TOP}` } };
+    const { radius, given } = state.readouts.bend_limit;  // the hose's minimum, or a typical one (studio/warnings.py)
+    const title = given ? `bend radius / minimum ${fmt(radius)} mm` : `bend radius / typical minimum ${fmt(radius)} mm (none given)`;
+    return { colours: state.bend_radius.map((r) => ratioColour(r === null ? null : r / radius)), legend: { kind: 'ratio', title, low: '0', mid: '1', high: `≥ ${RATIO_TOP}` } };
   }
   if (name === 'torsion') {
     const largest = Math.max(...state.twisting_moment.map(Math.abs));

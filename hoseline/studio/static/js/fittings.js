@@ -9,6 +9,7 @@ import * as THREE from 'three';
 import { TransformControls } from 'three/addons/controls/TransformControls.js';
 
 const COLOURS = { start: 0x2f7bd8, end: 0xd84f2f, clip: 0x8a5cc2 };
+const DRAWN_ALONE_MS = 50;  // a dragged fitting whose state has not come by then is drawn without it
 
 export class FittingsView {
   /** onDrag(name, object): the fitting `name` was moved by the gizmo (or by drag()). */
@@ -28,11 +29,17 @@ export class FittingsView {
     this.gizmo.setSpace('local');
     this.gizmo.setSize(0.8);
     studioScene.scene.add(this.gizmo.getHelper());
-    this.gizmo.addEventListener('change', () => studioScene.render());
+    // during a drag the fitting is drawn with the state answering it, not before: a frame drawn meanwhile (in
+    // software, without a GPU, it takes the CPU for tens of ms) would hold up the server's step; only a slow
+    // answer lets the fitting be drawn alone, DRAWN_ALONE_MS after the move
+    this.gizmo.addEventListener('change', () => {
+      if (this.dragging) studioScene.requestRenderAfter(DRAWN_ALONE_MS); else studioScene.requestRender();
+    });
     this.gizmo.addEventListener('dragging-changed', (event) => {
       studioScene.orbit.enabled = !event.value;
       this.dragging = event.value;
       if (!event.value && this.afterDrag) this.afterDrag();
+      studioScene.requestRender();
     });
     this.gizmo.addEventListener('objectChange', () => {
       if (this.adjust) this.adjust(this.objects[this.selected]);  // snapping (snapping.js), before it is sent
@@ -127,7 +134,7 @@ export class FittingsView {
     if (mode) this.gizmo.setMode(mode);
     this.selected = name;
     if (name) this.gizmo.attach(this.objects[name]); else this.gizmo.detach();
-    this.studioScene.render();
+    this.studioScene.requestRender();
   }
 
   /** Move fitting `name` by `offset` (mm, world) and turn it by `degrees` about its own `axis` (0 x, 1 y, 2 z),

@@ -13,5 +13,5 @@ export function focusOn(studioScene, point, radius) {
   camera.updateProjectionMatrix();
   orbit.target.copy(point);
   orbit.update();
-  studioScene.render();
+  studioScene.requestRender();
 }

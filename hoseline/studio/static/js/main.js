@@ -2,6 +2,7 @@
 // window.studio exposes the state drawn and a promise per seq, for the tests and the benchmark.
 import * as THREE from 'three';
 import { Connection } from './connection.js';
+import { marks } from './marks.js';
 import { stationColours } from './colormaps.js';
 import { StudioScene } from './scene.js';
 import { HoseView } from './hose.js';
@@ -14,11 +15,13 @@ import { Measure } from './measure.js';
 import { focusOn } from './focus.js';
 import { Persisted } from './persist.js';
 import { SaveChoice } from './save.js';
+import { Busy } from './busy.js';
 
 const view = document.getElementById('view');
 const studioScene = new StudioScene(view);
 const hose = new HoseView(studioScene.scene);
 const obstacles = new ObstacleView(studioScene.scene);
+studioScene.keepDrawn(obstacles.group);
 const fittings = new FittingsView(studioScene, (name, object) => send(name.startsWith('clip')
   ? { type: 'set', clips: fittings.clipTargets() } : { type: 'set', [name]: FittingsView.target(object) }));
 let session = null, state = null, starting = true, playing = false;
@@ -30,12 +33,13 @@ const panel = new Panel({
   typed: (name, field, values) => fittings.setTyped(name, field, values),
   pose: (index) => { playing = false; send({ type: 'set', pose: index }); },
   play: () => { playing = !playing; if (playing) send({ type: 'set', pose: nextPose() }); },
-  place: () => send({ type: 'place' }),
-  segments: (count) => send({ type: 'segments', segments: count }),
+  place: () => busyUntilDrawn('placing the hose again', send({ type: 'place' })),
+  segments: (count) => busyUntilDrawn('placing the hose again', send({ type: 'segments', segments: count })),
   clearance: (obstacle, required) => send({ type: 'clearance', obstacle, required }),
   files: (files) => upload([...files]),
   runSweep,
 });
+const busy = new Busy(view);
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
 const toolbar = view.querySelector('.toolbar');
@@ -47,8 +51,10 @@ let keptSelection = { selected: persisted.kept.selected, mode: persisted.kept.mo
 new SaveChoice(document.getElementById('save'), () => state && state.comparison);
 let refused = null;  // the seq of the last message the server refused: its state puts a dragged handle back
 
+/** Send a message: a target ('set') waits while another is in flight (Connection.sendTarget). */
 function send(message) {
-  return connection.send({ ...message, edit: edits.edit });
+  const tagged = { ...message, edit: edits.edit };
+  return message.type === 'set' ? connection.sendTarget(tagged) : connection.send(tagged);
 }
 
 /** What the kept camera belongs to: the file (its name) and the session's revision. */
@@ -58,15 +64,16 @@ function receive(message) {
   if (message.type === 'session') {
     session = message;
     starting = true;
-    obstacles.load(message.obstacles).then(() => { if (state) fitView(); })
+    obstacles.load(message.obstacles).then(() => { studioScene.forgetLayer(); if (state) fitView(); })
       .catch((error) => panel.message(String(error), true));
   } else if (message.type === 'state') {
+    panel.messages.carriedOut(message.seq);
     draw(message);
   } else if (message.type === 'comparison') {
     if (state) { state.comparison = message.comparison; showSoon(state); }
   } else if (message.type === 'error') {
     refused = message.seq;
-    panel.message(message.message, true);
+    panel.message(message.message, true, message.seq);
     playing = false;
   }
 }
@@ -82,33 +89,46 @@ function draw(message) {
   fittings.shapeEnds(message.pieces);
   obstacles.place(message.obstacle_poses);
   // a handle dragged past where the hose can follow stops at the last shape reached
-  if (message.seq === null ? !connection.waiting : message.seq >= connection.seq || message.seq === refused) {
+  if (message.seq === null ? !connection.waiting
+      : (message.seq >= connection.seq && !connection.pending) || message.seq === refused) {
     fittings.place(message.fittings, message.clips, message.seq === refused);
   }
   if (starting) { fitView(); starting = false; restoreSelection(); }
-  studioScene.render();
-  const drawnAt = performance.now();
-  if (message.seq !== null) {
-    for (const sentAt of connection.takeUpTo(message.seq)) latencies.push(drawnAt - sentAt);
-    for (let k = drawnWaiters.length - 1; k >= 0; k--) {
-      if (drawnWaiters[k][0] <= message.seq) { drawnWaiters[k][1](drawnAt); drawnWaiters.splice(k, 1); }
-    }
-  }
+  studioScene.requestRender((drawnAt) => drawn(message.seq, drawnAt));
   for (const event of (message.step && message.step.events) || []) panel.message(event);
   showSoon(message);
   if (playing && message.seq === connection.seq) send({ type: 'set', pose: nextPose() });
 }
 
-/** Show a state's numbers in the panel at the next animation frame: during a drag the page's layout
- * is done at most once a frame, however many states arrive. */
-let shownSoon = null;
+/** The frame that draws the state answering `seq` was drawn at `drawnAt` (performance.now()). */
+function drawn(seq, drawnAt) {
+  if (seq === null) return;
+  marks.add('drawn', seq, drawnAt);
+  for (const sentAt of connection.takeUpTo(seq)) latencies.push(drawnAt - sentAt);
+  for (let k = drawnWaiters.length - 1; k >= 0; k--) {
+    if (drawnWaiters[k][0] <= seq) { drawnWaiters[k][1](drawnAt); drawnWaiters.splice(k, 1); }
+  }
+}
+
+/** Show `text` in the busy indicator until the state answering `seq` is drawn. */
+function busyUntilDrawn(text, seq) {
+  const done = busy.start(text);
+  drawnWaiters.push([seq, done]);
+}
+
+/** Show a state's numbers in the panel at an animation frame at least PANEL_MS after the last time: during a drag
+ * the panel's layout and painting (the CPU's, without a GPU) are done 10 times a second, however many states
+ * arrive, and the last state is always shown. */
+const PANEL_MS = 100;
+let shownSoon = null, shownAt = -Infinity;
 function showSoon(message) {
   if (shownSoon === null) {
-    requestAnimationFrame(() => {
+    setTimeout(() => requestAnimationFrame(() => {
       panel.show(shownSoon);
       panel.badge(shownSoon.comparison);
       shownSoon = null;
-    });
+      shownAt = performance.now();
+    }), Math.max(0, shownAt + PANEL_MS - performance.now()));
   }
   shownSoon = message;
 }
@@ -127,7 +147,7 @@ function nextPose() {
 }
 
 function fitView() {
-  const box = hose.bounds().union(obstacles.bounds());
+  const box = obstacles.boundsNear(hose.bounds());
   for (const object of Object.values(fittings.objects)) box.expandByPoint(object.position);
   studioScene.setGround(box);
   if (!persisted.restoreCamera(studioScene, sessionKey())) studioScene.view('iso');
@@ -146,6 +166,15 @@ function showLegend(legend) {
 
 /** Upload dropped or chosen files: with a .toml among them, the others are kept for it and it is opened last. */
 async function upload(files) {
+  const done = busy.start(`opening ${files.map((file) => file.name).join(', ')}`);
+  try {
+    await uploadInOrder(files);
+  } finally {
+    done();
+  }
+}
+
+async function uploadInOrder(files) {
   const main = files.filter((file) => file.name.toLowerCase().endsWith('.toml'));
   const ordered = main.length ? [...files.filter((file) => !main.includes(file)).map((file) => [file, true]), ...main.map((file) => [file, false])]
     : files.map((file) => [file, false]);
@@ -206,7 +235,7 @@ window.addEventListener('keydown', (event) => {
   else if (event.key === 'f') focusSelected();
   markActive();
 });
-document.getElementById('colour-map').addEventListener('change', () => { if (state) { paint(); studioScene.render(); } });
+document.getElementById('colour-map').addEventListener('change', () => { if (state) { paint(); studioScene.requestRender(); } });
 
 // a click on a fitting selects it for the gizmo
 const raycaster = new THREE.Raycaster();
@@ -257,4 +286,6 @@ window.studio = {
   get receivedAt() { return connection.receivedAt; },
   /** The seq of the last message sent. */
   get seq() { return connection.seq; },
+  /** Timestamps of targets sent, states received and frames drawn, for the benchmark (marks.js). */
+  marks,
 };

@@ -44,7 +44,7 @@ export class Measure {
     this.points = [];
     this.group.traverse((child) => { if (child.geometry) { child.geometry.dispose(); child.material.dispose(); } });
     this.group.clear();
-    this.studioScene.render();
+    this.studioScene.requestRender();
   }
 
   /** The point of the view under a pointer event, on the nearest of the targets: {point, what} or null. */
@@ -82,6 +82,6 @@ export class Measure {
     } else {
       this.readout.textContent = `from ${found.what} at [${found.point.toArray().map(fmt).join(', ')}]: pick the second point`;
     }
-    this.studioScene.render();
+    this.studioScene.requestRender();
   }
 }

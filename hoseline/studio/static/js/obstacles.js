@@ -2,6 +2,8 @@
 // placed by the pose of the body they move with.
 import * as THREE from 'three';
 
+const NEAR = 0.1;  // of the hose's diagonal: the reach round the hose within which obstacles are framed with it
+
 export class ObstacleView {
   constructor(scene) {
     this.group = new THREE.Group();
@@ -38,7 +40,16 @@ export class ObstacleView {
     });
   }
 
-  bounds() {
-    return new THREE.Box3().setFromObject(this.group);
+  /** A box (THREE.Box3, mm) round `box` and the parts of the obstacles near it: within NEAR of its diagonal.  The
+   * view is fitted to it, so that a large obstacle (a contact plane is drawn four hose lengths wide) does not make
+   * the hose small. */
+  boundsNear(box) {
+    const near = box.clone().expandByScalar(NEAR * box.getSize(new THREE.Vector3()).length());
+    const framed = box.clone();
+    for (const mesh of this.meshes) {
+      const part = new THREE.Box3().setFromObject(mesh).intersect(near);
+      if (!part.isEmpty()) framed.union(part);
+    }
+    return framed;
   }
 }

@@ -1,5 +1,8 @@
 // The side panel: sliders with exact values, the fittings' numbers, readouts, the sweep timeline,
 // files and messages.  It reports what the user changed through callbacks and shows the states.
+// A box keeps what the user types only while it is typed in: once given (its change event), the boxes show the
+// values in force again, so a value the server refuses does not stay in its box.
+import { MessageList } from './message_list.js';
 
 // numbers for display: rounding noise (below 1e-9) shown as 0
 const clean = (x) => (Math.abs(x) < 1e-9 ? 0 : Number(x));
@@ -37,6 +40,11 @@ export class Panel {
   constructor(on) {
     this.on = on;
     this.scales = null;
+    this.messages = new MessageList(document.getElementById('messages'), document.getElementById('status'));
+    this.editing = new Set();  // inputs typed or slid in and not yet given
+    const panel = document.getElementById('panel');
+    panel.addEventListener('input', (event) => this.editing.add(event.target));
+    panel.addEventListener('change', (event) => this.editing.delete(event.target), true);  // before the input's own
     for (const div of document.querySelectorAll('.slider')) {
       const key = div.dataset.key;
       const [range, number] = div.querySelectorAll('input');
@@ -47,15 +55,15 @@ export class Panel {
         on.slider(key, value);
       });
       number.addEventListener('change', () => {
-        const value = Number(number.value);
-        if (Number.isFinite(value)) on.slider(key, value); else this.message(`${key}: not a number`, true);
+        const value = this.finite(number, div.querySelector('label').textContent);
+        if (value !== null) on.slider(key, value);
       });
     }
     for (const row of document.querySelectorAll('table.fittings tr[data-fitting]')) this.typedRow(row);
     const segments = document.getElementById('segments');
     segments.addEventListener('change', () => {
-      const count = Number(segments.value);
-      if (Number.isInteger(count)) on.segments(count); else this.message('segments: give a whole number', true);
+      const count = this.finite(segments, 'Segments');
+      if (Number.isInteger(count)) on.segments(count); else if (count !== null) this.refuse('Segments: give a whole number');
     });
     document.getElementById('place-again').addEventListener('click', () => on.place());
     const pose = document.getElementById('pose');
@@ -65,15 +73,36 @@ export class Panel {
     document.getElementById('open').addEventListener('change', (event) => on.files(event.target.files));
   }
 
-  /** Send the values typed in a row of the fittings table (three numbers) as a fitting's or clip's tip or direction. */
+  /** Send the values typed in a row of the fittings table (three numbers) as a fitting's or clip's tip or direction;
+   * a direction of length zero is refused. */
   typedRow(row) {
+    const name = row.querySelector('th').textContent;
     for (const input of row.querySelectorAll('input')) {
       input.addEventListener('change', () => {
-        const values = [...row.querySelectorAll('input')].map((i) => Number(i.value));
-        if (values.every(Number.isFinite)) this.on.typed(row.dataset.fitting, row.dataset.field, values);
-        else this.message('give three numbers', true);
+        const values = [...row.querySelectorAll('input')].map((box, k) => this.finite(box, `${name} ${'xyz'[k]}`));
+        if (values.includes(null)) return;
+        if (row.dataset.field === 'direction' && Math.hypot(...values) === 0) {
+          this.refuse(`${name}: 0, 0, 0 points nowhere: give a direction (of any length but zero)`);
+        } else {
+          this.on.typed(row.dataset.fitting, row.dataset.field, values);
+        }
       });
     }
+  }
+
+  /** The number in a box, or null when it holds none (a box of type number reads '' for nan, inf or 1e999): the box
+   * then shows the value in force again and the message names it. */
+  finite(input, name) {
+    const value = input.value.trim() === '' ? NaN : Number(input.value);
+    if (Number.isFinite(value)) return value;
+    this.refuse(`${name}: must be a finite number`);
+    return null;
+  }
+
+  /** Say why a typed value is refused and show the values in force again. */
+  refuse(text) {
+    this.message(text, true, -1);
+    if (this.shown) this.show(this.shown);
   }
 
   /** Rows of the fittings table for the clips: the point (mm) and, for a clip that holds it, the direction. */
@@ -124,9 +153,9 @@ export class Panel {
       const input = document.createElement('input');
       Object.assign(input, { type: 'number', min: 0, step: 'any', value: exact(obstacle.required) });
       input.addEventListener('change', () => {
-        const value = Number(input.value);
-        if (Number.isFinite(value) && value >= 0) this.on.clearance(obstacle.id, value);
-        else this.message(`${obstacle.name}: the required clearance is a distance of 0 mm or more`, true);
+        const value = this.finite(input, `${obstacle.name}: the required clearance`);
+        if (value !== null && value >= 0) this.on.clearance(obstacle.id, value);
+        else if (value !== null) this.refuse(`${obstacle.name}: the required clearance is a distance of 0 mm or more`);
       });
       const cell = document.createElement('td');
       cell.append(input);
@@ -137,26 +166,27 @@ export class Panel {
 
   /** Show a state message: values, fittings, readouts. */
   show(state) {
+    this.shown = state;
     for (const div of document.querySelectorAll('.slider')) {
       const key = div.dataset.key;
       const [range, number] = div.querySelectorAll('input');
       const value = sliderValue(state, key);
-      if (document.activeElement !== range) range.value = Math.round(this.scales[key].toPosition(value));
-      if (document.activeElement !== number) number.value = exact(value);
+      if (!this.editing.has(range)) range.value = Math.round(this.scales[key].toPosition(value));
+      if (!this.editing.has(number)) number.value = exact(value);
     }
     const segments = document.getElementById('segments');
-    if (document.activeElement !== segments) segments.value = state.hose.segments;
+    if (!this.editing.has(segments)) segments.value = state.hose.segments;
     for (const row of document.querySelectorAll('#obstacle-list tr')) {
       const near = state.readouts.min_clearance[Number(row.dataset.obstacle)];
       const input = row.querySelector('input');
-      if (near && document.activeElement !== input) input.value = exact(near.required);
+      if (near && !this.editing.has(input)) input.value = exact(near.required);
     }
     for (const row of document.querySelectorAll('table.fittings tr[data-fitting]')) {
       const fitting = row.dataset.clip === undefined ? state.fittings[row.dataset.fitting] : state.clips[Number(row.dataset.clip)];
       if (!fitting) continue;
       const values = row.dataset.field === 'point' ? fitting.point : direction(row.dataset.fitting, fitting.quaternion);
       row.querySelectorAll('input').forEach((input, k) => {
-        if (document.activeElement !== input) input.value = exact(values[k]);
+        if (!this.editing.has(input)) input.value = exact(values[k]);
       });
     }
     if (state.pose !== null && this.session && this.session.sweep) {
@@ -174,13 +204,17 @@ export class Panel {
       rows.push([`clearance to ${near.name}`, `${fmt(near.distance)} mm (required ${fmt(near.required)}) at s = ${fmt(near.s)} mm`, ok]);
     }
     if (!r.min_clearance.length) rows.push(['clearance', 'no obstacles', null]);
-    const limit = state.hose.min_bend_radius;
-    rows.push(['min bend radius', `${fmt(r.min_bend_radius)} mm${limit ? ` (minimum ${fmt(limit)})` : ''}`,
-      limit ? r.min_bend_radius === null || r.min_bend_radius >= limit : null]);
+    const warned = (readout) => r.warnings.filter((w) => w.readout === readout).map((w) => w.text);
+    const limit = r.bend_limit, bendWarnings = warned('min_bend_radius');
+    rows.push(['min bend radius', [`${fmt(r.min_bend_radius)} mm (${limit.given ? 'minimum' : 'typical minimum'} ${fmt(limit.radius)})`,
+      ...bendWarnings], !bendWarnings.length, 'min_bend_radius']);
     rows.push(['hose length', r.overall_length === null ? `${fmt(r.free_length)} mm`
       : [`free ${fmt(r.free_length)} mm`, `overall ${fmt(r.overall_length)} mm (fittings included)`], null]);
-    rows.push(['start reaction', [vector(r.start_force, 'N'), vector(r.start_moment, 'N·mm')], null]);
-    rows.push(['end reaction', [vector(r.end_force, 'N'), vector(r.end_moment, 'N·mm')], null]);
+    for (const end of ['start', 'end']) {
+      const reactionWarnings = warned(`${end}_reaction`);
+      rows.push([`${end} reaction`, [vector(r[`${end}_force`], 'N'), vector(r[`${end}_moment`], 'N·mm'), ...reactionWarnings],
+        reactionWarnings.length ? false : null, `${end}_reaction`]);
+    }
     for (const c of r.contacts) {
       const touching = c.total_force.some((v) => v !== 0);  // a point contact lies on no length
       rows.push([`contact with ${c.name}`, touching
@@ -199,8 +233,9 @@ export class Panel {
     rows.push(['unique (placement)', checked ? (comparison.unique ? 'yes' : 'no: another stable shape exists') : 'not checked', checked ? comparison.unique : null]);
     if (state.step) rows.push(['last step', `${state.step.iterations} Newton iterations, ${fmt(1000 * state.step.seconds, 2)} ms, moved ${fmt(state.step.movement, 3)} mm`, null]);
     const table = document.getElementById('readouts');
-    table.replaceChildren(...rows.map(([name, value, ok]) => {
+    table.replaceChildren(...rows.map(([name, value, ok, readout]) => {
       const tr = document.createElement('tr');
+      if (readout) tr.dataset.readout = readout;
       const th = document.createElement('td'); th.textContent = name;
       const td = document.createElement('td');
       [value].flat().forEach((line, k) => td.append(...(k ? [document.createElement('br')] : []), line));
@@ -250,14 +285,9 @@ export class Panel {
     document.getElementById('labels-cancel').onclick = () => { form.hidden = true; };
   }
 
-  message(text, error = false) {
-    const list = document.getElementById('messages');
-    const item = document.createElement('li');
-    item.textContent = text;
-    if (error) item.className = 'error';
-    list.prepend(item);
-    while (list.children.length > 50) list.lastChild.remove();
-    document.getElementById('status').textContent = text;
+  /** A line in the Messages list and the header (MessageList.add); `seq`: the change an error refuses. */
+  message(text, error = false, seq = undefined) {
+    this.messages.add(text, error, seq);
   }
 
   reportLink(url) {

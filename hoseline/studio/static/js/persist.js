@@ -35,7 +35,7 @@ export class Persisted {
     camera.updateProjectionMatrix();
     orbit.target.fromArray(kept.target);
     orbit.update();
-    studioScene.render();
+    studioScene.requestRender();
     return true;
   }
 }

@@ -1,7 +1,10 @@
 // The 3D view: renderer, camera (z up, as the problem files' gravity), orbit/pan/zoom, a ground
-// grid and axes, view presets.  It draws on demand (after a change), not in a loop.
+// grid and axes, view presets.  It draws on demand (after a change), not in a loop, and at most once an
+// animation frame: requestRender() marks the view dirty and the next frame draws it, however many changes
+// came before it (a drag's events, the states answering them, the orbit's moves).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { StaticLayer } from './static_layer.js';
 
 const PRESETS = {
   iso: new THREE.Vector3(1, -1, 0.8),
@@ -35,10 +38,13 @@ export class StudioScene {
     sun.position.set(1, -2, 3);
     this.scene.add(sun);
     this.orbit = new OrbitControls(this.camera, this.renderer.domElement);
-    this.orbit.addEventListener('change', () => this.render());
+    this.orbit.addEventListener('change', () => this.requestRender());
     this.ground = new THREE.Group();
     this.scene.add(this.ground);
     this.drawCount = 0;
+    this.dirty = false;
+    this.drawnCallbacks = [];  // called with performance.now() once the next frame is drawn
+    this.later = null;  // the timer of requestRenderAfter
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
   }
@@ -49,12 +55,45 @@ export class StudioScene {
     this.renderer.setSize(width, height, false);
     this.camera.aspect = width / height;
     this.camera.updateProjectionMatrix();
-    this.render();
+    this.requestRender();
   }
 
+  /** Draw at the next animation frame (once, however often asked before it); then(performance.now()) is
+   * called when that frame has been drawn. */
+  requestRender(then) {
+    if (then) this.drawnCallbacks.push(then);
+    clearTimeout(this.later);
+    this.later = null;
+    if (this.dirty) return;
+    this.dirty = true;
+    requestAnimationFrame(() => this.render());
+  }
+
+  /** Draw in `ms` milliseconds, unless a frame is asked for before then (which draws this change too). */
+  requestRenderAfter(ms) {
+    if (this.later === null && !this.dirty) this.later = setTimeout(() => this.requestRender(), ms);
+  }
+
+  /** Draw now, and call the callbacks waiting for a frame. */
   render() {
-    this.renderer.render(this.scene, this.camera);
+    this.dirty = false;
+    if (this.layer) this.layer.render(this.renderer, this.scene, this.camera);
+    else this.renderer.render(this.scene, this.camera);
     this.drawCount += 1;
+    const drawnAt = performance.now(), callbacks = this.drawnCallbacks;
+    this.drawnCallbacks = [];
+    for (const then of callbacks) then(drawnAt);
+  }
+
+  /** Draw `group` (of this scene; objects that stay put during a drag: the obstacles) into a layer kept between
+   * frames (static_layer.js); its objects are seen to move by their matrices; forgetLayer() after any other change. */
+  keepDrawn(group) {
+    this.layer = new StaticLayer(group);
+  }
+
+  forgetLayer() {
+    this.layer?.forget();
+    this.requestRender();
   }
 
   /** A ground grid below `box` (THREE.Box3, mm) and axes at the origin, sized to it. */
@@ -88,6 +127,6 @@ export class StudioScene {
     this.camera.updateProjectionMatrix();
     this.orbit.target.copy(centre);
     this.orbit.update();
-    this.render();
+    this.requestRender();
   }
 }
