@@ -232,32 +232,61 @@ def snapped_drag(page, name: str, axis: str, readout: str) -> dict:
     step = 0.7 * radial / np.linalg.norm(radial)  # less than a snapping step on the screen
     components = lambda text: np.array([float(x) for x in text.split("[")[1].rstrip("]").split(",")])
 
+    wanted = components(readout)
+
+    def settled() -> str:
+        # the readout once it stops changing: on a loaded machine the page may take the moves in late
+        last = page.locator("#drag-readout").inner_text()
+        for _ in range(10):
+            page.wait_for_timeout(15)
+            now = page.locator("#drag-readout").inner_text()
+            if now == last:
+                return now
+            last = now
+        return last
+
     def drag():
         page.mouse.down()
-        position, direction = handle.copy(), 1.0
+        position, increasing = handle.copy(), None  # increasing: the screen direction (+1, -1) that moves towards it
         for _ in range(600):
-            position += direction * step
-            page.mouse.move(*position)
-            text = page.locator("#drag-readout").inner_text()
+            progress = 0.0
+            text = settled()
             if text == readout:
                 page.mouse.up()
                 return
-            moved = components(text)
-            if direction > 0 and np.any(moved) and np.dot(moved, components(readout)) < 0:
-                direction = -1.0
+            if text.startswith("moved"):
+                progress = float(components(text) @ wanted) / float(wanted @ wanted)
+                if increasing is None and progress != 0.0:
+                    increasing = 1.0 if progress > 0.0 else -1.0
+            position += (increasing or 1.0) * (1.0 if progress < 1.0 else -1.0) * step
+            page.mouse.move(*position)
         raise AssertionError(f"the readout never read {readout!r}")
 
     return drawn_after(page, drag)
 
 
-def test_a_drag_along_the_floor_then_a_turn_saves_as_shown(browser, tmp_path):
+def test_a_drag_along_the_floor_then_a_turn_saves_as_shown_or_says_how_far_off(browser, tmp_path):
+    """On the frictionless floor the hose dragged along and rolled may lie on a branch that a fresh placement reaches
+    at some twist, or on one none reaches (which one depends on the states the drag passed through: moves made while
+    the server steps are merged, issue 29).  Either Save writes the shape shown, or it asks and the file "as moved"
+    solves as far off as it says."""
     with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
         snapped_drag(page, "end", "Z", "moved 30 mm [-30, 0, 0]")  # towards the start: more of it on the floor
         page.keyboard.press("s")  # snapping off
         state = drag_handle(page, "end", "Z", "rotate", -60)  # rolled on the floor
         assert min(c["min_gap"] for c in state["readouts"]["contacts"]) < 0.05  # lying on the floor
-        solved = saved_and_solved(page, tmp_path)
-        assert np.max(np.linalg.norm(solved - shown(page), axis=1)) <= SAVED_TO_SHOWN_MM
+        page.wait_for_function("() => window.studio.state.comparison && window.studio.state.comparison.saved",
+                               timeout=120000)
+        saved = page.evaluate("() => window.studio.state.comparison.saved")
+        if saved["same"]:
+            solved = saved_and_solved(page, tmp_path)
+            assert np.max(np.linalg.norm(solved - shown(page), axis=1)) <= SAVED_TO_SHOWN_MM
+        else:
+            page.click("#save")
+            page.wait_for_selector("#save-choice a.save-moved", timeout=60000)
+            solved = saved_and_solved(page, tmp_path / "moved", "#save-choice a.save-moved")
+            distance = np.max(np.linalg.norm(solved - shown(page), axis=1))
+            assert distance == pytest.approx(saved["distance"], abs=SAVED_TO_SHOWN_MM)
         assert errors == []
 
 

@@ -11,8 +11,9 @@ from hoseline.demos.thesis_hose import demo_problem
 from hoseline.procedures.placement.sequence import solve
 from hoseline.studio.messages import Target
 from hoseline.studio.session import Session
+from hoseline.studio.view import state_message
 from hoseline.studio.warnings import bend_limit, force_scale, shape_warnings
-from tests.test_studio_editing import taut_problem
+from test_studio_messages import taut_problem
 
 
 def kinds(problem, result):
@@ -46,7 +47,7 @@ def test_the_force_scales_are_the_weight_and_the_euler_load():
 
 def test_a_hose_pulled_towards_taut_gets_its_reactions_warned_of_and_then_a_kink():
     session = Session(taut_problem())
-    end = session.message()["fittings"]["end"]
+    end = state_message(session)["fittings"]["end"]
     seen = {}
     for pull in range(1, 25):  # mm along -x, away from the start; the mount distance is reached at 25
         point = np.array(end["point"]) - [pull, 0.0, 0.0]
