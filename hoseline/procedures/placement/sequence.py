@@ -36,7 +36,7 @@ import numpy as np
 from hoseline.mechanics import clipped_newton
 from hoseline.mechanics.braid import braid_coefficients
 from hoseline.mechanics.clipped_newton import clip_rolls
-from hoseline.mechanics.newton import RodProperties, end_frame_of, solve_equilibrium, total_energy
+from hoseline.mechanics.newton import RodProperties, end_frame_of, node_positions, solve_equilibrium, total_energy
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
 from hoseline.mechanics.rotations import perpendicular, rotate_frames, rotation_matrix, rotation_vector
 from hoseline.mechanics.stiffeners import spring_set
@@ -56,7 +56,7 @@ from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.stiffening import phase_in_springs
 from hoseline.procedures.placement.stations import build_result
 from hoseline.procedures.placement.accuracy import coarse_guess, coarse_segments, richardson_error
-from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, other_way_round, symmetric_images
+from hoseline.procedures.placement.uniqueness import DISTINCT, fork_branches, judge_uniqueness, other_way_round, symmetric_images
 
 if TYPE_CHECKING:
     from hoseline.procedures.contact.bring_in import BroughtIn
@@ -218,6 +218,7 @@ class _Sequence:
             if problem.contact and problem.contact_placement == "bring_in":
                 self.path_contact = only(self.contact, [], self_contact=True) if problem.self_contact else None
         self.brought_in: list[BroughtIn] | None = None  # how each obstacle came in, on the main run
+        self.main_end: tuple[Clamps, RodState, float, float] | None = None  # what finish returned on the main run
 
     def clear_buckle(self, state: RodState, fraction: float, log: ContinuationLog) -> RodState:
         """With contact, the first buckled shape (of `state` and the other sides relaxed at the first step, at
@@ -250,7 +251,30 @@ class _Sequence:
 
     def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None = None):
         """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`, twisted
-        to twist_deg degrees (default the problem's)."""
+        to twist_deg degrees (default the problem's).  The first call is the main run; a later one (another branch)
+        that reaches the lock on the main run's equilibrium there ends where the main run ended (the rest of the
+        sequence is the same from the same state), which it returns without following the twist again, saying so in
+        `log`."""
+        main = self.locked_frame is None
+        end = self._finish(log, phase, fraction, state, twist_deg)
+        if main:
+            self.main_end = end
+        return end
+
+    def _rejoins_main(self, clamps: Clamps, locked_state: RodState) -> bool:
+        """Whether `locked_state`, an equilibrium at the lock (the place phase's end clamps), is the main run's there:
+        stations within DISTINCT of the length, frames and clip rolls within DISTINCT rad."""
+        main, props = self.locked_state, self.props
+        if main is None or main.clip_rolls.shape != locked_state.clip_rolls.shape:
+            return False
+        nodes = node_positions(props, clamps, locked_state) - node_positions(props, clamps, main)
+        return bool(np.max(np.abs(nodes)) <= DISTINCT * props.length
+                    and np.max(np.abs(locked_state.frames - main.frames)) <= DISTINCT
+                    and np.all(np.abs(locked_state.clip_rolls - main.clip_rolls) <= DISTINCT)
+                    and abs(math.remainder(locked_state.roll - main.roll, 2.0 * math.pi)) <= DISTINCT)
+
+    def _finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None):
+        """finish, the sequence itself."""
         problem, props, control = self.problem, self.props, self.control
         twist_deg = problem.end_twist_deg if twist_deg is None else twist_deg
         if phase == "place":
@@ -270,6 +294,11 @@ class _Sequence:
             locked_frame = end_frame_of(place_path(1.0), state)
             lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))
             locked_state = state
+            if (self.main_end is not None and twist_deg == problem.end_twist_deg
+                    and self._rejoins_main(place_path(1.0), locked_state)):
+                log.events.append("place: rejoined the main run's equilibrium at the lock (end roll free); from there "
+                                  "the sequence is the main run's")
+                return self.main_end
             locked_clips, free_rolls = self.path.locked_clips(state)
             state = RodState(state.frames, state.end_force, 0.0, state.clip_forces, free_rolls, state.clip_arc_lengths)
             fraction = 0.0

@@ -46,6 +46,7 @@ class Candidate:
     state: RodState | None
     lock_angle_deg: float = 0.0
     other_way: bool = False  # the shape of the end fitting turned the other way round (a mirror image at +-180 deg)
+    rejoined: bool = False  # a fork's branch that met the main run's equilibrium at the lock (its end is the answer's)
 
     @property
     def stable(self) -> bool:
@@ -68,7 +69,7 @@ def fork_branches(props: RodProperties, final: Clamps, state: RodState, forks: l
             except (PlacementError, ValueError) as exc:
                 candidates.append(Candidate(f"{origin} could not be followed to the end: {exc}", None, None))
                 continue
-            candidates.append(Candidate(origin, clamps, end_state, lock_angle_deg))
+            candidates.append(Candidate(origin, clamps, end_state, lock_angle_deg, rejoined=clamps is final))
     return candidates
 
 
@@ -134,7 +135,10 @@ def judge_uniqueness(result: Result, props: RodProperties, final: Clamps, state:
         nodes = node_positions(props, candidate.clamps, candidate.state)
         distances = [float(np.max(np.linalg.norm(nodes - other, axis=1))) for other in seen]
         if min(distances) <= DISTINCT * props.length:
-            if distances[0] <= DISTINCT * props.length and candidate.clamps is not final:
+            if candidate.rejoined:
+                result.events.append(f"uniqueness: {candidate.origin} ends on this shape again: it meets the path "
+                                     "taken at the lock (end roll free), and the twist from there is the same")
+            elif distances[0] <= DISTINCT * props.length and candidate.clamps is not final:
                 result.events.append(f"uniqueness: {candidate.origin} ends on this shape again")
             continue
         seen.append(nodes)
