@@ -249,14 +249,17 @@ class _Sequence:
         return follow_on_cushion(phase, path, props, state, self.path_contact, start=fraction, control=control,
                                  log=log, progress=self.progress)
 
-    def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None = None):
+    def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None = None,
+               first_step: float | None = None):
         """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`, twisted
-        to twist_deg degrees (default the problem's).  The first call is the main run; a later one (another branch)
+        to twist_deg degrees (default the problem's); first_step: the first continuation step in `phase` (a fraction
+        of it; default the step control's, as when the phase starts).  The first call is the main run; a later one (another branch)
         that reaches the lock on the main run's equilibrium there ends where the main run ended (the rest of the
         sequence is the same from the same state), which it returns without following the twist again, saying so in
         `log`."""
         main = self.locked_frame is None
-        end = self._finish(log, phase, fraction, state, twist_deg)
+        control = self.control if first_step is None else replace(self.control, first=first_step)
+        end = self._finish(log, phase, fraction, state, twist_deg, control)
         if main:
             self.main_end = end
         return end
@@ -273,8 +276,9 @@ class _Sequence:
                     and np.all(np.abs(locked_state.clip_rolls - main.clip_rolls) <= DISTINCT)
                     and abs(math.remainder(locked_state.roll - main.roll, 2.0 * math.pi)) <= DISTINCT)
 
-    def _finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None):
-        """finish, the sequence itself."""
+    def _finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None,
+                resumed: StepControl):
+        """finish, the sequence itself; `resumed`: the step control of the phase it resumes."""
         problem, props, control = self.problem, self.props, self.control
         twist_deg = problem.end_twist_deg if twist_deg is None else twist_deg
         if phase == "place":
@@ -288,7 +292,7 @@ class _Sequence:
                 check_held_paths(place_path, [clip.arc_length for clip in problem.clips], self.path_contact)
                 check_clear(f"the buckled hose at fraction {fraction:g} of the place phase (the first step, taken "
                             "without contact)", props, place_path(fraction), state, self.path_contact)
-            state = self._follow("place", place_path, self.place_props, state, log, fraction, control)
+            state = self._follow("place", place_path, self.place_props, state, log, fraction, resumed)
             if props.springs is not None:
                 state = phase_in_springs(props, place_path(1.0), state, log, self.progress)
             locked_frame = end_frame_of(place_path(1.0), state)
@@ -307,6 +311,7 @@ class _Sequence:
                 self.locked_state, self.twist_start = locked_state, state
         elif phase == "twist":
             locked_frame, lock_angle_deg, locked_clips = self.locked_frame, self.lock_angle_deg, self.locked_clips
+            control = resumed
         else:
             raise ValueError(f"the placement cannot be resumed in phase {phase!r}")
 
