@@ -105,14 +105,20 @@ def solve(
     alternatives: bool = False,
     control: StepControl = StepControl(),
     estimate_error: bool = True,
+    check_uniqueness: bool = True,
 ) -> Result:
     """Place the hose of `problem` and return its stable equilibrium.
 
     progress: optional callable(phase, fraction) called after each continuation step.
     alternatives: also return the other stable equilibria found (as Results in result.alternatives).
     estimate_error: estimate the discretisation error from one coarser solve (result.discretisation_error, mm).
-    Raises PlacementError with the phase, fraction and residual when the path cannot be followed.
+    check_uniqueness: search for other stable equilibria (uniqueness.py); without it result.unique is None ("not
+    checked", result.unchecked says so), for a caller that reads the shape only (a study's sweep samples).
+    Raises PlacementError with the phase, fraction and residual when the path cannot be followed; ValueError for
+    alternatives without check_uniqueness.
     """
+    if alternatives and not check_uniqueness:
+        raise ValueError("solve: alternatives need check_uniqueness=True (the other equilibria are what it finds)")
     started = time.perf_counter()
     props = rod_properties(problem)
     log = ContinuationLog()
@@ -127,15 +133,19 @@ def solve(
 
         result = with_contact(result, props, final, state, sequence.contact)
         result.obstacle_placement = sequence.brought_in or []
-    others = fork_branches(props, final, state, log.forks, sequence.finish)
-    if sequence.contact is None:
-        others += symmetric_images(problem, props, final, state, lock_angle_deg)  # with clips: those they allow
+    if check_uniqueness:
+        others = fork_branches(props, final, state, log.forks, sequence.finish)
+        if sequence.contact is None:
+            others += symmetric_images(problem, props, final, state, lock_angle_deg)  # with clips: those they allow
+        else:
+            result.events.append("uniqueness: with contact, the mounts' symmetry images are not checked (the obstacles "
+                                 "need not share the symmetry); the other branches of the first buckle are")
+        # after the images: where the mirror is the other way's shape, its origin says why
+        others += other_way_round(problem, sequence.twist_start, sequence.finish, others)
+        others = judge_uniqueness(result, props, final, state, others, log.forks)
     else:
-        result.events.append("uniqueness: with contact, the mounts' symmetry images are not checked (the obstacles "
-                             "need not share the symmetry); the other branches of the first buckle are")
-    # after the images: where the mirror is the other way's shape, its origin says why
-    others += other_way_round(problem, sequence.twist_start, sequence.finish, others)
-    others = judge_uniqueness(result, props, final, state, others, log.forks)
+        result.path_forks = [fork.describe() for fork in log.forks]
+        result.unique, result.unchecked = None, "the search for other equilibria was not asked for"
     if alternatives:
         result.alternatives = [
             build_result(problem, props, other.clamps, other.state, other.lock_angle_deg, log, started, residual)
