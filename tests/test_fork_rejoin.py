@@ -63,8 +63,8 @@ def test_a_branch_that_ends_elsewhere_is_still_reported():
 
 def test_only_the_path_s_own_equilibrium_at_the_lock_counts_as_rejoined():
     """The main run's state at the lock rejoins (its end roll a whole turn off too: the same clamp); the same state
-    with one segment turned by 1e-5 rad (stations moved 1e-3 mm), or its end roll turned by 1e-5 rad, does not: its
-    twist would be followed."""
+    with one segment turned by 1e-5 rad (stations moved 1e-3 mm), its end roll turned by 1e-5 rad, or a sliding clip
+    the main run has not, does not: its twist would be followed."""
     _, _, run, _, _ = placed(180.0)
     lock, main = run.path.place(1.0), run.locked_state
     assert run._rejoins_main(lock, main)
@@ -73,6 +73,7 @@ def test_only_the_path_s_own_equilibrium_at_the_lock_counts_as_rejoined():
     frames[5] = rotation_matrix(np.array([0.0, 0.0, 1e-5])) @ frames[5]
     assert not run._rejoins_main(lock, replace(main, frames=frames))
     assert not run._rejoins_main(lock, replace(main, roll=main.roll + 1e-5))
+    assert not run._rejoins_main(lock, replace(main, clip_arc_lengths=np.array([100.0])))  # not the same clips
 
 
 def test_solve_follows_the_branch_with_the_step_the_path_took(monkeypatch):

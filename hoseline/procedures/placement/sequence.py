@@ -276,13 +276,16 @@ class _Sequence:
 
     def _rejoins_main(self, clamps: Clamps, locked_state: RodState) -> bool:
         """Whether `locked_state`, an equilibrium at the lock (the place phase's end clamps), is the main run's there:
-        stations within DISTINCT of the length, frames and clip rolls within DISTINCT rad."""
+        stations and sliding clips' arc lengths within DISTINCT of the length, frames, end roll and clip rolls within
+        DISTINCT rad."""
         main, props = self.locked_state, self.props
-        if main is None or main.clip_rolls.shape != locked_state.clip_rolls.shape:
+        if (main is None or main.clip_rolls.shape != locked_state.clip_rolls.shape
+                or main.clip_arc_lengths.shape != locked_state.clip_arc_lengths.shape):
             return False
         nodes = node_positions(props, clamps, locked_state) - node_positions(props, clamps, main)
         return bool(np.max(np.abs(nodes)) <= DISTINCT * props.length
                     and np.max(np.abs(locked_state.frames - main.frames)) <= DISTINCT
+                    and np.all(np.abs(locked_state.clip_arc_lengths - main.clip_arc_lengths) <= DISTINCT * props.length)
                     and np.all(np.abs(locked_state.clip_rolls - main.clip_rolls) <= DISTINCT)
                     and abs(math.remainder(locked_state.roll - main.roll, 2.0 * math.pi)) <= DISTINCT)
 
