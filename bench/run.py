@@ -4,7 +4,8 @@
 
 Prints one table (medians over repeated runs, single core) and the shape differences:
 - hoseline at 50/100/200 segments: wall time per full placement (straight hose -> placed ->
-  twisted 180 deg), Newton iterations, time per iteration;
+  twisted 180 deg) with the uniqueness verdict (`solve`, what the command line runs) and without it
+  (`place_only`, the bare placement a study's samples run), Newton iterations, time per iteration;
 - PyElastica and MuJoCo (bench/peers/), 100 elements, driven along the same path as damped
   dynamics run to rest (stopped when the shape changes less than 0.01 mm), when they are
   installed (`pip install -e .[bench]`); each is warmed up first (Numba compilation), then
@@ -32,6 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from hoseline import Hose, Mount, Problem, solve  # noqa: E402
+from hoseline.procedures.placement.sequence import place_only  # noqa: E402
 
 TWIST_DEG = 180.0
 
@@ -74,6 +76,18 @@ def time_hoseline(segments: int, repeats: int, estimate_error: bool = False):
     return statistics.median(times), result
 
 
+def time_bare(segments: int, repeats: int) -> float:
+    """Median seconds of the bare placement (place_only: no verdict, no Result, no error estimate)."""
+    problem = thesis_problem(segments)
+    place_only(problem)
+    times = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        place_only(problem)
+        times.append(time.perf_counter() - started)
+    return statistics.median(times)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=15)
@@ -86,8 +100,10 @@ def main() -> None:
     rows = []
     hoseline_100 = None
     estimate_rows = []
+    bare_rows = []
     for segments in (50, 100, 200):
         median, result = time_hoseline(segments, args.repeats)
+        bare = time_bare(segments, args.repeats)
         with_estimate, estimated = time_hoseline(segments, args.repeats, estimate_error=True)
         estimate_rows.append((segments, with_estimate * 1e3, estimated.discretisation_error,
                               shape_error(result.centerline, references)))
@@ -102,6 +118,7 @@ def main() -> None:
                 shape_error(result.centerline, references),
             )
         )
+        bare_rows.append((segments, bare * 1e3))
 
     peer_rows = []
     if not args.no_peers:
@@ -128,12 +145,16 @@ def main() -> None:
                 )
             )
 
-    print(f"Thesis brake hose, placement to {TWIST_DEG:.0f} deg twist, one core, median of {args.repeats} runs")
+    print(f"Thesis brake hose, placement to {TWIST_DEG:.0f} deg twist, one core, median of {args.repeats} runs "
+          f"(load average {os.getloadavg()[0]:.2f} at the end)")
     print(f"{'solver':<16}{'time [ms]':>12}{'work':>18}{'us/iter':>10}{'shape error [mm]':>18}")
     for name, ms, work, per_iteration, error in rows:
         per = "" if per_iteration != per_iteration else f"{per_iteration:.0f}"
         print(f"{name:<16}{ms:>12.2f}{work:>18}{per:>10}{error:>18.4f}")
     print("shape error: largest distance to hoseline at 800 segments (nearer mirror image), 101 stations")
+    print("hoseline rows: `solve` with the uniqueness verdict; the bare placement (place_only) without it:")
+    for segments, ms in bare_rows:
+        print(f"  hoseline {segments}: {ms:.2f} ms bare")
     print("with the a-posteriori error estimate (solve's default; the rows above leave it out):")
     for segments, ms, estimate, error in estimate_rows:
         print(f"  hoseline {segments}: {ms:.2f} ms, estimated error {estimate:.4f} mm (shape error above {error:.4f} mm)")

@@ -106,3 +106,18 @@ def test_the_estimate_compares_through_an_interpolation_of_fourth_order():
         errors.append(np.max(np.abs(local_cubic(known, helix(known), wanted) - helix(wanted))))
     assert 12.0 < errors[0] / errors[1] < 20.0 and 12.0 < errors[1] / errors[2] < 20.0
     np.testing.assert_allclose(local_cubic(known, helix(known), known), helix(known), atol=1e-12)
+
+
+def test_a_solve_asked_not_to_check_uniqueness_says_not_checked():
+    """check_uniqueness=False (a study's sweep samples): the same shape, the forks on the path still listed, and the
+    verdict "not checked" with the reason, never "yes"; alternatives need the search."""
+    problem = with_segments(demo_problem(0.0), 40)
+    checked = solve(problem, estimate_error=False)
+    unchecked = solve(problem, estimate_error=False, check_uniqueness=False)
+    assert checked.unique is True and unchecked.unique is None
+    assert unchecked.summary()["uniqueness"] == "not checked"
+    assert unchecked.unchecked == "the search for other equilibria was not asked for"
+    assert unchecked.path_forks == checked.path_forks and unchecked.other_equilibria == []
+    np.testing.assert_array_equal(unchecked.centerline, checked.centerline)
+    with pytest.raises(ValueError, match="alternatives need check_uniqueness"):
+        solve(problem, alternatives=True, check_uniqueness=False)

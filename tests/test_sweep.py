@@ -234,3 +234,17 @@ def test_twisting_the_end_body_of_a_u_bend_snaps_and_is_reported():
     # the jump stands out from the ordinary pose-to-pose movement
     steps = [np.max(np.linalg.norm(b - a, axis=1)) for a, b in zip(result.centerlines[:-1], result.centerlines[1:])]
     assert snap.jump > 2.0 * np.median(steps)
+
+
+def test_a_sweep_judges_its_assembly_once_and_a_study_sample_not_at_all():
+    """`hoseline sweep` reports the assembly's uniqueness verdict and error estimate (the thesis hose at 180 deg: not
+    unique, its mirror image); a study's sweep sample (judge_assembly=False) reads the poses only, so it skips both and
+    says so, and its poses are the same."""
+    problem = demo_problem(180.0, segments=SEGMENTS)
+    motion = BodyMotion("frame", rigid_motion(3), np.arange(3.0), (Stage("step", "", 0, 3),))
+    sweep = SweepProblem(problem, "frame", "frame", (motion,), compare_free_roll=False)
+    judged, sample = run_sweep(sweep), run_sweep(sweep, judge_assembly=False)
+    assert judged.assembly.unique is False and judged.assembly.discretisation_error > 0.0
+    assert sample.assembly.unique is None and sample.assembly.discretisation_error is None
+    assert "not asked for" in sample.assembly.summary()["uniqueness_not_checked"]
+    np.testing.assert_array_equal(sample.centerlines, judged.centerlines)

@@ -48,13 +48,15 @@ class Fork:
     phase, fraction: where (the path's name and its fraction in [0, 1]).  others: the stable
     states not taken, in order of energy.  energy_gaps: their energy above the one taken, N*mm.
     equal_energy: the nearest other is of equal energy (a symmetric fork: rounding could have
-    taken either side).
+    taken either side).  step: the step (a fraction of the path) the path took on from the fork, which its
+    other branches are followed with too; None where the path went on with its first step.
     """
 
     phase: str
     fraction: float
     others: list[RodState]
     energy_gaps: list[float]
+    step: float | None = None
 
     @property
     def equal_energy(self) -> bool:
@@ -198,6 +200,7 @@ def follow(
             continue
         log.steps += 1
         previous = (t, state)
+        forks = len(log.forks)
         if report.unstable_directions != 0:
             trial, t_next = _leave_unstable_branch(phase, path, props, state, t, trial, t_next, report, log, control)
             previous = None  # a branch switch breaks the secant
@@ -206,6 +209,8 @@ def follow(
             progress(phase, t)
         if report.iterations <= control.fast_iterations:
             dt = min(control.largest, dt * 2.0)
+        if len(log.forks) > forks:
+            log.forks[-1].step = dt
     return state
 
 

@@ -36,7 +36,7 @@ import numpy as np
 from hoseline.mechanics import clipped_newton
 from hoseline.mechanics.braid import braid_coefficients
 from hoseline.mechanics.clipped_newton import clip_rolls
-from hoseline.mechanics.newton import RodProperties, end_frame_of, solve_equilibrium, total_energy
+from hoseline.mechanics.newton import RodProperties, end_frame_of, node_positions, solve_equilibrium, total_energy
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState
 from hoseline.mechanics.rotations import perpendicular, rotate_frames, rotation_matrix, rotation_vector
 from hoseline.mechanics.stiffeners import spring_set
@@ -56,7 +56,7 @@ from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.stiffening import phase_in_springs
 from hoseline.procedures.placement.stations import build_result
 from hoseline.procedures.placement.accuracy import coarse_guess, coarse_segments, richardson_error
-from hoseline.procedures.placement.uniqueness import fork_branches, judge_uniqueness, other_way_round, symmetric_images
+from hoseline.procedures.placement.uniqueness import DISTINCT, fork_branches, judge_uniqueness, other_way_round, symmetric_images
 
 if TYPE_CHECKING:
     from hoseline.procedures.contact.bring_in import BroughtIn
@@ -105,14 +105,20 @@ def solve(
     alternatives: bool = False,
     control: StepControl = StepControl(),
     estimate_error: bool = True,
+    check_uniqueness: bool = True,
 ) -> Result:
     """Place the hose of `problem` and return its stable equilibrium.
 
     progress: optional callable(phase, fraction) called after each continuation step.
     alternatives: also return the other stable equilibria found (as Results in result.alternatives).
     estimate_error: estimate the discretisation error from one coarser solve (result.discretisation_error, mm).
-    Raises PlacementError with the phase, fraction and residual when the path cannot be followed.
+    check_uniqueness: search for other stable equilibria (uniqueness.py); without it result.unique is None ("not
+    checked", result.unchecked says so), for a caller that reads the shape only (a study's sweep samples).
+    Raises PlacementError with the phase, fraction and residual when the path cannot be followed; ValueError for
+    alternatives without check_uniqueness.
     """
+    if alternatives and not check_uniqueness:
+        raise ValueError("solve: alternatives need check_uniqueness=True (the other equilibria are what it finds)")
     started = time.perf_counter()
     props = rod_properties(problem)
     log = ContinuationLog()
@@ -127,15 +133,19 @@ def solve(
 
         result = with_contact(result, props, final, state, sequence.contact)
         result.obstacle_placement = sequence.brought_in or []
-    others = fork_branches(props, final, state, log.forks, sequence.finish)
-    if sequence.contact is None:
-        others += symmetric_images(problem, props, final, state, lock_angle_deg)  # with clips: those they allow
+    if check_uniqueness:
+        others = fork_branches(props, final, state, log.forks, sequence.finish)
+        if sequence.contact is None:
+            others += symmetric_images(problem, props, final, state, lock_angle_deg)  # with clips: those they allow
+        else:
+            result.events.append("uniqueness: with contact, the mounts' symmetry images are not checked (the obstacles "
+                                 "need not share the symmetry); the other branches of the first buckle are")
+        # after the images: where the mirror is the other way's shape, its origin says why
+        others += other_way_round(problem, sequence.twist_start, sequence.finish, others)
+        others = judge_uniqueness(result, props, final, state, others, log.forks)
     else:
-        result.events.append("uniqueness: with contact, the mounts' symmetry images are not checked (the obstacles "
-                             "need not share the symmetry); the other branches of the first buckle are")
-    # after the images: where the mirror is the other way's shape, its origin says why
-    others += other_way_round(problem, sequence.twist_start, sequence.finish, others)
-    others = judge_uniqueness(result, props, final, state, others, log.forks)
+        result.path_forks = [fork.describe() for fork in log.forks]
+        result.unique, result.unchecked = None, "the search for other equilibria was not asked for"
     if alternatives:
         result.alternatives = [
             build_result(problem, props, other.clamps, other.state, other.lock_angle_deg, log, started, residual)
@@ -218,6 +228,7 @@ class _Sequence:
             if problem.contact and problem.contact_placement == "bring_in":
                 self.path_contact = only(self.contact, [], self_contact=True) if problem.self_contact else None
         self.brought_in: list[BroughtIn] | None = None  # how each obstacle came in, on the main run
+        self.main_end: tuple[Clamps, RodState, float, float] | None = None  # what finish returned on the main run
 
     def clear_buckle(self, state: RodState, fraction: float, log: ContinuationLog) -> RodState:
         """With contact, the first buckled shape (of `state` and the other sides relaxed at the first step, at
@@ -248,9 +259,39 @@ class _Sequence:
         return follow_on_cushion(phase, path, props, state, self.path_contact, start=fraction, control=control,
                                  log=log, progress=self.progress)
 
-    def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None = None):
+    def finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None = None,
+               first_step: float | None = None):
         """(final clamps, equilibrium, lock angle in degrees, residual) from `state` at `fraction` of `phase`, twisted
-        to twist_deg degrees (default the problem's)."""
+        to twist_deg degrees (default the problem's); first_step: the first continuation step in `phase` (a fraction
+        of it; default the step control's, as when the phase starts).  The first call is the main run; a later one (another branch)
+        that reaches the lock on the main run's equilibrium there ends where the main run ended (the rest of the
+        sequence is the same from the same state), which it returns without following the twist again, saying so in
+        `log`."""
+        main = self.locked_frame is None
+        control = self.control if first_step is None else replace(self.control, first=first_step)
+        end = self._finish(log, phase, fraction, state, twist_deg, control)
+        if main:
+            self.main_end = end
+        return end
+
+    def _rejoins_main(self, clamps: Clamps, locked_state: RodState) -> bool:
+        """Whether `locked_state`, an equilibrium at the lock (the place phase's end clamps), is the main run's there:
+        stations and sliding clips' arc lengths within DISTINCT of the length, frames, end roll and clip rolls within
+        DISTINCT rad."""
+        main, props = self.locked_state, self.props
+        if (main is None or main.clip_rolls.shape != locked_state.clip_rolls.shape
+                or main.clip_arc_lengths.shape != locked_state.clip_arc_lengths.shape):
+            return False
+        nodes = node_positions(props, clamps, locked_state) - node_positions(props, clamps, main)
+        return bool(np.max(np.abs(nodes)) <= DISTINCT * props.length
+                    and np.max(np.abs(locked_state.frames - main.frames)) <= DISTINCT
+                    and np.all(np.abs(locked_state.clip_arc_lengths - main.clip_arc_lengths) <= DISTINCT * props.length)
+                    and np.all(np.abs(locked_state.clip_rolls - main.clip_rolls) <= DISTINCT)
+                    and abs(math.remainder(locked_state.roll - main.roll, 2.0 * math.pi)) <= DISTINCT)
+
+    def _finish(self, log: ContinuationLog, phase: str, fraction: float, state: RodState, twist_deg: float | None,
+                resumed: StepControl):
+        """finish, the sequence itself; `resumed`: the step control of the phase it resumes."""
         problem, props, control = self.problem, self.props, self.control
         twist_deg = problem.end_twist_deg if twist_deg is None else twist_deg
         if phase == "place":
@@ -264,12 +305,17 @@ class _Sequence:
                 check_held_paths(place_path, [clip.arc_length for clip in problem.clips], self.path_contact)
                 check_clear(f"the buckled hose at fraction {fraction:g} of the place phase (the first step, taken "
                             "without contact)", props, place_path(fraction), state, self.path_contact)
-            state = self._follow("place", place_path, self.place_props, state, log, fraction, control)
+            state = self._follow("place", place_path, self.place_props, state, log, fraction, resumed)
             if props.springs is not None:
                 state = phase_in_springs(props, place_path(1.0), state, log, self.progress)
             locked_frame = end_frame_of(place_path(1.0), state)
             lock_angle_deg = math.degrees(math.remainder(state.roll, 2.0 * math.pi))
             locked_state = state
+            if (self.main_end is not None and twist_deg == problem.end_twist_deg
+                    and self._rejoins_main(place_path(1.0), locked_state)):
+                log.events.append("place: rejoined the main run's equilibrium at the lock (end roll free); from there "
+                                  "the sequence is the main run's")
+                return self.main_end
             locked_clips, free_rolls = self.path.locked_clips(state)
             state = RodState(state.frames, state.end_force, 0.0, state.clip_forces, free_rolls, state.clip_arc_lengths)
             fraction = 0.0
@@ -278,6 +324,7 @@ class _Sequence:
                 self.locked_state, self.twist_start = locked_state, state
         elif phase == "twist":
             locked_frame, lock_angle_deg, locked_clips = self.locked_frame, self.lock_angle_deg, self.locked_clips
+            control = resumed
         else:
             raise ValueError(f"the placement cannot be resumed in phase {phase!r}")
 

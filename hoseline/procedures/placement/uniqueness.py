@@ -34,7 +34,7 @@ DISTINCT = 1e-6  # of the length: shapes closer than this are the same equilibri
 ANGLE_TOLERANCE_DEG = 1e-9  # a twist this close to half a turn counts as one
 BRANCHES_FOLLOWED = 3  # fork branches followed to the end at most (each costs about one placement)
 
-Finish = Callable[..., tuple[Clamps, RodState, float, float]]  # (log, phase, fraction, state[, twist_deg])
+Finish = Callable[..., tuple[Clamps, RodState, float, float]]  # (log, phase, fraction, state[, twist_deg, first_step])
 
 
 @dataclass
@@ -46,6 +46,7 @@ class Candidate:
     state: RodState | None
     lock_angle_deg: float = 0.0
     other_way: bool = False  # the shape of the end fitting turned the other way round (a mirror image at +-180 deg)
+    rejoined: bool = False  # a fork's branch that met the main run's equilibrium at the lock (its end is the answer's)
 
     @property
     def stable(self) -> bool:
@@ -54,7 +55,8 @@ class Candidate:
 
 def fork_branches(props: RodProperties, final: Clamps, state: RodState, forks: list[Fork], finish: Finish) -> list[Candidate]:
     """The branches not taken at the forks of the path, each followed to the end of the sequence by `finish` (at most
-    BRANCHES_FOLLOWED; the others are returned as candidates not followed)."""
+    BRANCHES_FOLLOWED; the others are returned as candidates not followed), from the fork with the step the path took
+    on from it: the same sequence as the branch taken."""
     candidates = []
     for fork in forks:
         for rank, other in enumerate(fork.others):
@@ -64,11 +66,12 @@ def fork_branches(props: RodProperties, final: Clamps, state: RodState, forks: l
                 candidates.append(Candidate(f"{origin} was not followed (at most {BRANCHES_FOLLOWED} are)", None, None))
                 continue
             try:
-                clamps, end_state, lock_angle_deg, _ = finish(ContinuationLog(), fork.phase, fork.fraction, other)
+                clamps, end_state, lock_angle_deg, _ = finish(ContinuationLog(), fork.phase, fork.fraction, other,
+                                                              first_step=fork.step)
             except (PlacementError, ValueError) as exc:
                 candidates.append(Candidate(f"{origin} could not be followed to the end: {exc}", None, None))
                 continue
-            candidates.append(Candidate(origin, clamps, end_state, lock_angle_deg))
+            candidates.append(Candidate(origin, clamps, end_state, lock_angle_deg, rejoined=clamps is final))
     return candidates
 
 
@@ -134,7 +137,10 @@ def judge_uniqueness(result: Result, props: RodProperties, final: Clamps, state:
         nodes = node_positions(props, candidate.clamps, candidate.state)
         distances = [float(np.max(np.linalg.norm(nodes - other, axis=1))) for other in seen]
         if min(distances) <= DISTINCT * props.length:
-            if distances[0] <= DISTINCT * props.length and candidate.clamps is not final:
+            if candidate.rejoined:
+                result.events.append(f"uniqueness: {candidate.origin} ends on this shape again: it meets the path "
+                                     "taken at the lock (end roll free), and the twist from there is the same")
+            elif distances[0] <= DISTINCT * props.length and candidate.clamps is not final:
                 result.events.append(f"uniqueness: {candidate.origin} ends on this shape again")
             continue
         seen.append(nodes)

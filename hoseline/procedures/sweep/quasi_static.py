@@ -269,23 +269,28 @@ def _largest_movement(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def run_sweep(sweep: SweepProblem, *, progress: Progress | None = None,
-              equilibria: list[tuple[Clamps, RodState]] | None = None) -> SweepResult:
+              equilibria: list[tuple[Clamps, RodState]] | None = None, judge_assembly: bool = True) -> SweepResult:
     """Carry the hose of `sweep` through all its poses; measure clearance and health at each.
 
     progress: optional callable(phase, fraction) for a progress bar.
     equilibria: if given, the (clamps, state) of every pose is appended to it, in pose order (the
         SweepResult keeps no frames; the variation study's sensitivities differentiate these).
+    judge_assembly: give the assembly (the placement at design position) its uniqueness verdict and error estimate;
+        without, its unique is None ("not checked") and its discretisation_error None (a study's samples, which read
+        the poses only).
     Raises PlacementError (from the placement or the continuation) when a pose cannot be reached.
     """
     with one_blas_thread():  # many small dense solves: BLAS threads only contend
-        return _run_sweep(sweep, progress, equilibria)
+        return _run_sweep(sweep, progress, equilibria, judge_assembly)
 
 
-def _run_sweep(sweep: SweepProblem, progress: Progress | None, equilibria: list | None) -> SweepResult:
+def _run_sweep(sweep: SweepProblem, progress: Progress | None, equilibria: list | None,
+               judge_assembly: bool) -> SweepResult:
     """run_sweep on one BLAS thread."""
     started = time.perf_counter()
     problem = sweep.problem
-    assembly = solve(problem, progress=_prefixed(progress, "assembly"))
+    assembly = solve(problem, progress=_prefixed(progress, "assembly"), estimate_error=judge_assembly,
+                     check_uniqueness=judge_assembly)
     count = sweep.pose_count
     n_nodes = problem.hose.segments + 1
     tracker = _Tracker(sweep, assembly, roll_free=False)
@@ -425,7 +430,8 @@ def _free_roll_sweep(sweep: SweepProblem, assembly: Result, progress: Progress |
     """
     problem = sweep.problem
     if problem.end_twist_deg != 0.0:
-        assembly = solve(replace(problem, end_twist_deg=0.0), progress=_prefixed(progress, "assembly, roll free"))
+        assembly = solve(replace(problem, end_twist_deg=0.0), progress=_prefixed(progress, "assembly, roll free"),
+                         estimate_error=False, check_uniqueness=False)  # its shape only
     tracker = _Tracker(sweep, assembly, roll_free=True)
     shapes = np.empty((sweep.pose_count, problem.hose.segments + 1, 3))
     for k in range(sweep.pose_count):

@@ -6,7 +6,8 @@ warm start, Newton from the nominal hose's equilibria (nominal.warm_start; the p
 where Newton does not reach a stable state; the first CHECKED_WARM_STARTS samples are placed both
 ways and the distance between the answers recorded); a
 sweep sample places the hose and carries it through the sweep (sweep.quasi_static.run_sweep,
-the free-roll comparison left out).  A sample that fails (the hose does not reach its mounts,
+the free-roll comparison, the assembly's uniqueness checks and its error estimate left out: a sample reads the
+poses only).  A sample that fails (the hose does not reach its mounts,
 the path cannot be followed, the final state is not stable: SOLVER_FAILURES) is kept with its
 reason; any other exception is a fault of the program and stops the study.  failure_cause gives
 the cause of a reason, its numbers left out, so that failures can be grouped by cause.
@@ -75,7 +76,7 @@ class StudyBase:
         if self.sweep is None:
             props, clamps, state, _ = place_only(problem)
             return placement_readings(problem, props, clamps, state), 0
-        result = run_sweep(replace(self.sweep, problem=problem, compare_free_roll=False))
+        result = run_sweep(replace(self.sweep, problem=problem, compare_free_roll=False), judge_assembly=False)
         readings = PoseReadings(
             centerlines=result.centerlines,
             bend_radius=result.bend_radius,
