@@ -58,6 +58,8 @@ def study_command(
     if not quiet:
         if outcome.probabilities:
             Console().print(_limits_table(outcome))
+        if outcome.rare_events:
+            Console().print(_rare_table(outcome))
         for note in outcome.notes:
             Console().print(f"[yellow]note:[/] {note}", soft_wrap=True)
         if outcome.design is not None:
@@ -77,4 +79,18 @@ def _limits_table(outcome) -> Table:
         style = "green" if p.broken == 0 else "bold red"
         table.add_row(p.limit.describe(), f"[{style}]{p.estimate:.4g}[/]", f"[{p.low:.3g}, {p.high:.3g}]",
                       f"{p.broken} / {p.solved}", str(p.failed))
+    return table
+
+
+def _rare_table(outcome) -> Table:
+    """FORM, SORM and importance sampling of each limit as a Rich table."""
+    table = Table(title="rare failures (FORM; design points in design_point/)")
+    for column in ("limit", "beta", "FORM P", "SORM P", "importance sampling P", "95 % interval", "solves"):
+        table.add_column(column)
+    for event in outcome.rare_events:
+        check = event.importance
+        table.add_row(event.limit.describe(), f"{event.point.beta:.4g}", f"{event.form:.3g}",
+                      "" if event.sorm is None else f"{event.sorm:.3g}",
+                      "" if check is None else f"{check.estimate:.3g}",
+                      "" if check is None else f"[{check.low:.3g}, {check.high:.3g}]", str(event.evaluations))
     return table

@@ -1,6 +1,6 @@
 """The study report: one self-contained HTML page (plotly.js embedded, no network needed to open it).
 
-Sections: verdict (probability of breaking each limit with its 95 % interval), notes, 3D envelope,
+Sections: verdict (probability of breaking each limit with its 95 % interval), notes, rare failures (FORM), 3D envelope,
 distributions, first order beside Monte Carlo with the tornado chart and the station spreads,
 clearance per pose (sweeps), the design search (ranked table, heat map), failures, the run, the input.
 """
@@ -23,6 +23,7 @@ from hoseline.report.study_figures import (
     tornado_figure,
     view_figure,
 )
+from hoseline.report.study_methods import rare_failure_section
 from hoseline.report.sweep_html import STYLE, _format, _performance_table
 
 SAMPLES_LISTED = 20  # sample indexes shown per failure cause (summary.json lists them all)
@@ -44,7 +45,7 @@ def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_te
     if outcome.notes:
         parts += ["<h2>Notes</h2>", "<ul>" + "".join(f"<li>{html.escape(n)}</li>" for n in outcome.notes) + "</ul>"]
     if outcome.samples:
-        parts += ["<h2>Limits</h2>", _probability_table(outcome), "<h2>Envelope</h2>",
+        parts += ["<h2>Limits</h2>", _probability_table(outcome), *rare_failure_section(outcome), "<h2>Envelope</h2>",
                   "<p>Blue surface: the union of the tubes of all sampled hoses (also envelope.stl"
                   + (f", meshed on a grid of {envelope.cell:.2g} mm" if envelope is not None else "")
                   + "). Grey: some samples. Dark blue: the nominal hose. Red dashed: the worst sample of each limit "

@@ -16,6 +16,8 @@ import numpy as np
 from hoseline.procedures.placement.continuation import PlacementError, Progress
 from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
+from hoseline.procedures.variation.rare import RareEvent, RareTask, rare_event, standard_normal_deviations
+from hoseline.procedures.variation.reliability import importance_estimate, importance_points
 from hoseline.procedures.variation.scheduler import scheduler_address
 from hoseline.procedures.variation.samples import StudyContext, nominal_context
 from hoseline.procedures.variation.sensitivity import placement_sensitivities
@@ -87,6 +89,11 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
             cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose
             design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
             timings["design"] = time.perf_counter() - tick
+        rare_events = None
+        if study.reliability is not None:
+            tick = time.perf_counter()
+            rare_events = _rare_events(engine, replace(context, warm=None), study, stores, progress)
+            timings["rare"] = time.perf_counter() - tick
         design = None
         if design_samples is not None:
             names = [q.name for q in study.quantities]
@@ -103,6 +110,8 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     outcome = summarize(study, samples, nominal.values(nominal.centerlines), nominal.centerlines, sensitivities)
     outcome.notes[:0] = notes
     outcome.design = design
+    outcome.rare_events = rare_events or []
+    outcome.notes.extend(note for event in outcome.rare_events for note in event.notes())
     outcome.run = {
         "where": where.describe(),
         "samples": len(coordinates),
@@ -111,6 +120,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         "seconds, waiting for the cluster (after the nominal hose)": timings["cluster"],
         "seconds, samples": timings["samples"],
         "seconds, design search": timings.get("design"),
+        "seconds, rare failures (FORM and importance sampling)": timings.get("rare"),
         "seconds, design optimiser": timings.get("optimiser"),
         "seconds, closing the cluster": timings["close"],
         "seconds, whole study": time.perf_counter() - started,
@@ -135,6 +145,38 @@ def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.nda
 
     engine.run(context, coordinates, batch_size, keep, done=set(batches))
     return merge_batches(batches)
+
+
+def _rare_events(engine: Engine, context: StudyContext, study: Study, stores: Callable[[str], BatchStore],
+                 progress: Progress | None) -> list[RareEvent]:
+    """FORM (and SORM) of every limit the study's [reliability] names (one task each, kept in the "form" store),
+    then the importance samples around each design point (a stage of samples each)."""
+    options = study.reliability
+    limits = study.reliability_limits()
+    sorm = options.method == "sorm"
+    tasks = [RareTask(limit, study.variation, sorm) for limit in limits]
+    store = stores("form")
+    results = store.finished()
+
+    def keep(k: int, arrays: dict[str, np.ndarray]) -> None:
+        store.save(k, arrays)
+        results[k] = arrays
+        if progress is not None:
+            progress("rare failures (FORM)", len(results) / len(tasks))
+
+    engine.map(rare_event, context, tasks, keep, done=set(results))
+    events = [RareEvent.from_arrays(limit, study.variation, results[k], sorm) for k, limit in enumerate(limits)]
+    names = [q.name for q in study.quantities]
+    for k, event in enumerate(events):
+        if options.importance_samples == 0 or not np.all(np.isfinite(event.point.design_point)):
+            continue
+        points = importance_points(event.point.design_point, options.importance_samples, options.seed + k)
+        deviations = standard_normal_deviations(study.variation, points)
+        samples = _stage(engine, f"importance_{k}", context, deviations, default_batch_size(len(points)), stores,
+                         progress)
+        margins = event.limit.margin(samples["values"][:, names.index(event.limit.quantity.name)])
+        event.importance = importance_estimate(points, event.point.design_point, margins)
+    return events
 
 
 def _refine(engine: Engine, context: StudyContext, tasks: list[RefineTask], stores: Callable[[str], BatchStore],

@@ -18,6 +18,7 @@ from hoseline.procedures.variation.designs import balanced, unit_design
 from hoseline.procedures.variation.design_search import DesignGrid, DesignOutcome
 from hoseline.procedures.variation.engine import default_batch_size
 from hoseline.procedures.variation.quantities import Limit, Quantity, natural_scale, quantities
+from hoseline.procedures.variation.rare import RareEvent, Reliability
 from hoseline.procedures.variation.samples import StudyBase, failure_cause
 from hoseline.procedures.variation.sensitivity import Sensitivities
 from hoseline.procedures.variation.statistics import (
@@ -67,11 +68,21 @@ class Study:
     limits: tuple[Limit, ...]
     sensitivities: bool = True
     design: DesignGrid | None = None
+    reliability: Reliability | None = None
 
     @property
     def quantities(self) -> tuple[Quantity, ...]:
         """The judged quantities, in the order the samples store them."""
         return quantities(self.base.obstacle_names)
+
+    def reliability_limits(self) -> tuple[Limit, ...]:
+        """The limits whose rare failure [reliability] asks for (none without it): those it names, else every limit
+        but the deviation's (no derivative)."""
+        if self.reliability is None:
+            return ()
+        names = self.reliability.limits
+        return tuple(limit for limit in self.limits if (limit.quantity.name in names if names
+                                                        else limit.quantity.name != "deviation"))
 
     def coordinates(self) -> np.ndarray:
         """(count, width) the deviations of every sample (empty without tolerances)."""
@@ -137,6 +148,7 @@ class StudyOutcome:
     deviation: per station P5/P50/P95 (3, N+1) and the maximum (N+1,) of the distance from nominal, mm.
     clearance: per obstacle and pose, P5/P50/P95 (O, 3, M) and minimum (O, M), mm.
     failures: the failed samples grouped by cause (FailureCause, most frequent first).  first_order: None without sensitivities.  design: None without search.
+    rare_events: per limit of [reliability], FORM/SORM and the importance-sampling check (rare.RareEvent).
     notes: what a reader must know (unbalanced design, disagreement, failures).  run: figures of the run.
     """
 
@@ -154,6 +166,7 @@ class StudyOutcome:
     failures: list[FailureCause]
     first_order: FirstOrder | None = None
     design: DesignOutcome | None = None
+    rare_events: list[RareEvent] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     run: dict = field(default_factory=dict)
 

@@ -1,0 +1,170 @@
+"""Small probabilities of failure: FORM, SORM (Breitung) and importance sampling around the design point.
+
+In standard normal space z (independent N(0, 1) coordinates, mapped to the tolerances' deviations by
+the inverse distribution functions), a limit state g(z) is positive where the hose meets the limit and
+negative where it breaks it.  FORM finds the most probable failure point (the design point): the point
+of the surface g = 0 nearest the origin,
+
+    z* = argmin |z|^2 / 2  subject to  g(z) = 0,
+
+here by SciPy's SLSQP with the exact gradient of g (each evaluation one solve with its sensitivities),
+and takes P(failure) = Phi(-beta), beta = |z*| signed by g(0) (negative when the nominal already breaks
+the limit).  SORM (Breitung 1984) corrects for the surface's curvature at z*:
+
+    P = Phi(-beta) prod_i (1 + beta kappa_i)^(-1/2),
+
+kappa_i the principal curvatures, the eigenvalues of the Hessian of g on the tangent plane over |grad g|
+(positive where the failure domain curves away from the origin), the Hessian from central differences
+of the exact gradient along an orthonormal basis of the tangent plane (2 (d - 1) evaluations).
+
+Importance sampling checks either: z ~ N(z*, I), each sample weighted by phi(z) / phi(z - z*) =
+exp(-z.z* + |z*|^2 / 2); the estimate is the weighted fraction of failures, its standard error the
+standard deviation of the weighted indicator over sqrt(n).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import ndtr, ndtri
+
+from hoseline.procedures.variation.statistics import CONFIDENCE
+
+LimitState = Callable[[np.ndarray], tuple[float, np.ndarray]]  # z -> (g, dg/dz)
+CURVATURE_STEP = 0.1  # standard deviations: the step of the central differences of the gradient for SORM
+ALIGNED = 1e-3  # 1 - |cos| between z* and grad g at a design point: beyond, FORM did not converge
+MAX_ITERATIONS = 40
+
+
+@dataclass(frozen=True)
+class DesignPoint:
+    """FORM's answer: design_point (d,) z*, beta (signed: negative when g(0) < 0), gradient (d,) of g at z*,
+    evaluations of the limit state, converged (z* on g = 0 and along grad g), message (why not)."""
+
+    design_point: np.ndarray
+    beta: float
+    gradient: np.ndarray
+    evaluations: int
+    converged: bool
+    message: str
+
+    @property
+    def probability(self) -> float:
+        """FORM's P(failure) = Phi(-beta)."""
+        return float(ndtr(-self.beta))
+
+
+def design_point(limit_state: LimitState, dimensions: int) -> DesignPoint:
+    """The most probable failure point of `limit_state` (z -> (g, dg/dz)) in `dimensions` standard normal
+    coordinates, by SLSQP from the origin (the function is evaluated once per point, its values cached)."""
+    from scipy.optimize import minimize  # here: reading a study file needs none of it
+
+    cache: dict[bytes, tuple[float, np.ndarray]] = {}
+
+    def evaluate(z: np.ndarray) -> tuple[float, np.ndarray]:
+        key = np.asarray(z, dtype=float).tobytes()
+        if key not in cache:
+            g, gradient = limit_state(np.asarray(z, dtype=float))
+            cache[key] = (float(g), np.asarray(gradient, dtype=float))
+        return cache[key]
+
+    origin = np.zeros(dimensions)
+    g0, gradient0 = evaluate(origin)
+    if not math.isfinite(g0) or not np.any(gradient0):
+        return DesignPoint(origin, math.inf if g0 > 0 else -math.inf, gradient0, len(cache), False,
+                           "the limit state does not change with the tolerances at the nominal hose")
+    scale = abs(g0) if g0 != 0.0 else float(np.linalg.norm(gradient0))
+    start = -g0 * gradient0 / float(gradient0 @ gradient0)  # the design point of the linearised limit state
+    result = minimize(lambda z: 0.5 * float(z @ z), start, jac=lambda z: z, method="SLSQP",
+                      constraints=[{"type": "eq", "fun": lambda z: evaluate(z)[0] / scale,
+                                    "jac": lambda z: evaluate(z)[1] / scale}],
+                      options={"maxiter": MAX_ITERATIONS, "ftol": 1e-10})
+    z = np.asarray(result.x, dtype=float)
+    g, gradient = evaluate(z)
+    beta = math.copysign(float(np.linalg.norm(z)), g0)
+    norm = float(np.linalg.norm(z) * np.linalg.norm(gradient))
+    aligned = norm > 0.0 and 1.0 - abs(float(z @ gradient)) / norm < ALIGNED
+    on_surface = abs(g) <= 1e-6 * scale
+    converged = bool(result.success and aligned and on_surface)
+    message = "" if converged else (f"SLSQP: {result.message}; |g| = {abs(g):.3g} at the last point, "
+                                    f"1 - cos(z, grad g) = {1.0 - abs(float(z @ gradient)) / norm if norm else 1.0:.3g}")
+    return DesignPoint(z, beta, gradient, len(cache), converged, message)
+
+
+@dataclass(frozen=True)
+class Curvatures:
+    """SORM at a design point: curvatures (d - 1,) of the limit-state surface, evaluations spent on them."""
+
+    curvatures: np.ndarray
+    evaluations: int
+
+    def breitung(self, point: DesignPoint) -> float:
+        """Breitung's P(failure) = Phi(-beta) prod (1 + beta kappa)^(-1/2); NaN where it does not apply (a factor
+        1 + beta kappa <= 0, or the nominal hose already breaking the limit)."""
+        factors = 1.0 + point.beta * self.curvatures
+        if point.beta <= 0.0 or np.any(factors <= 0.0):
+            return float("nan")
+        return point.probability / float(np.sqrt(np.prod(factors)))
+
+
+def curvatures(limit_state: LimitState, point: DesignPoint, step: float = CURVATURE_STEP) -> Curvatures:
+    """The principal curvatures of g = 0 at `point`, from central differences of the gradient (step in standard
+    deviations) along an orthonormal basis of the tangent plane."""
+    from scipy.linalg import null_space
+
+    gradient = point.gradient
+    norm = float(np.linalg.norm(gradient))
+    basis = null_space(gradient[None, :])  # (d, d - 1) orthonormal, perpendicular to grad g
+    columns = []
+    for k in range(basis.shape[1]):
+        ahead = limit_state(point.design_point + step * basis[:, k])[1]
+        behind = limit_state(point.design_point - step * basis[:, k])[1]
+        columns.append(basis.T @ (ahead - behind) / (2.0 * step))
+    hessian = np.array(columns).reshape(basis.shape[1], basis.shape[1])
+    return Curvatures(np.linalg.eigvalsh(0.5 * (hessian + hessian.T)) / norm, 2 * basis.shape[1])
+
+
+@dataclass(frozen=True)
+class ImportanceEstimate:
+    """Importance sampling around a design point: estimate, standard_error, 95 % interval (low, high) (the
+    normal approximation, low clipped at 0), samples used (solved), failed (not solved: left out),
+    high_with_failed (the upper end if every failed sample broke the limit)."""
+
+    estimate: float
+    standard_error: float
+    low: float
+    high: float
+    samples: int
+    failed: int
+    high_with_failed: float
+
+    @property
+    def coefficient_of_variation(self) -> float:
+        """standard_error / estimate (inf for an estimate of 0)."""
+        return self.standard_error / self.estimate if self.estimate > 0.0 else math.inf
+
+
+def importance_points(center: np.ndarray, count: int, seed: int) -> np.ndarray:
+    """(count, d) standard normal points z ~ N(center, I) (seeded: the same every run)."""
+    return center + np.random.default_rng(seed).standard_normal((count, center.size))
+
+
+def importance_estimate(points: np.ndarray, center: np.ndarray, margins: np.ndarray) -> ImportanceEstimate:
+    """P(g < 0) from margins (n,) (g at each point; NaN: not solved) at `points` (n, d) ~ N(center, I)."""
+    weights = np.exp(-points @ center + 0.5 * float(center @ center))
+    solved = np.isfinite(margins)
+    n = int(solved.sum())
+    if n < 2:
+        nan = float("nan")
+        return ImportanceEstimate(nan, nan, nan, nan, n, int((~solved).sum()), nan)
+    terms = np.where(margins[solved] < 0.0, weights[solved], 0.0)
+    estimate = float(terms.mean())
+    error = float(terms.std(ddof=1) / math.sqrt(n))
+    half = float(ndtri(0.5 + CONFIDENCE / 2.0)) * error
+    with_failed = float((np.sum(terms) + np.sum(weights[~solved])) / len(margins))
+    return ImportanceEstimate(estimate, error, max(estimate - half, 0.0), estimate + half, n, int((~solved).sum()),
+                              max(with_failed, 0.0) + half)
+
