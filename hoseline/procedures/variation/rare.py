@@ -33,6 +33,8 @@ from hoseline.procedures.variation.tolerances import (CLIP_COORDINATES, COORDINA
 METHODS = ("form", "sorm")
 MAPPING_STEP = 1e-5  # standard deviations: central differences of the deviations along z
 TILT_STEP = 1e-4  # degrees: central differences of a turned direction
+RELATIVE = ("bend_radius", "end_torque", "twist_rate")  # positive by nature: their margins are taken as logarithms
+TINY = 1e-12  # of the limit: the least value whose logarithm is taken
 
 
 @dataclass(frozen=True)
@@ -94,23 +96,36 @@ def limit_state(variation: Variation, margin: Callable[[np.ndarray], tuple[float
 
 
 def hose_margin(base: StudyBase, variation: Variation, limit: Limit) -> Callable[[np.ndarray], tuple[float, np.ndarray]]:
-    """deviation -> (margin of `limit` of the hose with it, d(margin)/d(deviation)): one solve with sensitivities.
+    """deviation -> (margin of `limit` of the hose with it, d(margin)/d(deviation)): one solve with sensitivities
+    (NaN where the hose cannot be solved).
 
-    Raises the solver's failures (SOLVER_FAILURES) when the hose cannot be solved there.
+    The margin of a quantity positive by nature (RELATIVE: the bend radius, end torque, twist rate) is the logarithm
+    of the value over the limit (or its inverse): the same surface g = 0, so the same design point and beta, but
+    nearly linear where the quantity grows in proportion to a factor (the torque to the stiffness, lognormal), where
+    the difference grows exponentially along z and the search would wander.  A clearance's is the difference (mm).
     """
     from hoseline.procedures.variation.sensitivity import placement_sensitivities
     from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities
 
     sign = 1.0 if limit.margin(1.0) > limit.margin(0.0) else -1.0  # d(margin)/d(quantity)
+    relative = limit.quantity.name in RELATIVE and limit.value > 0.0
 
     def margin(deviation: np.ndarray) -> tuple[float, np.ndarray]:
         problem = perturbed(base.problem, deviation)
-        if base.sweep is None:
-            found = placement_sensitivities(problem, variation.varied)
-        else:
-            found = sweep_sensitivities(replace(base.sweep, problem=problem), variation.varied)
+        try:
+            if base.sweep is None:
+                found = placement_sensitivities(problem, variation.varied)
+            else:
+                found = sweep_sensitivities(replace(base.sweep, problem=problem), variation.varied)
+        except SOLVER_FAILURES:  # the hose cannot be solved here: the search steps back
+            return math.nan, np.full(deviation.size, math.nan)
         k = found.names.index(limit.quantity.name)
-        return float(limit.margin(found.values[k])), sign * found.derivatives[k] @ local_jacobian(base.problem, deviation)
+        value = float(found.values[k])
+        gradient = sign * found.derivatives[k] @ local_jacobian(base.problem, deviation)
+        if relative:
+            value = max(value, TINY * limit.value)
+            return sign * math.log(value / limit.value), gradient / value
+        return float(limit.margin(value)), gradient
 
     return margin
 

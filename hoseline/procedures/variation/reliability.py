@@ -8,7 +8,7 @@ of the surface g = 0 nearest the origin,
     z* = argmin |z|^2 / 2  subject to  g(z) = 0,
 
 here by SciPy's SLSQP with the exact gradient of g (each evaluation one solve with its sensitivities),
-and takes P(failure) = Phi(-beta), beta = |z*| signed by g(0) (negative when the nominal already breaks
+stopped when |g| <= 1e-7 |g(0)| and z is parallel to grad g (1 - cos <= 1e-6), and takes P(failure) = Phi(-beta), beta = |z*| signed by g(0) (negative when the nominal already breaks
 the limit).  SORM (Breitung 1984) corrects for the surface's curvature at z*:
 
     P = Phi(-beta) prod_i (1 + beta kappa_i)^(-1/2),
@@ -35,7 +35,8 @@ from hoseline.procedures.variation.statistics import CONFIDENCE
 
 LimitState = Callable[[np.ndarray], tuple[float, np.ndarray]]  # z -> (g, dg/dz)
 CURVATURE_STEP = 0.1  # standard deviations: the step of the central differences of the gradient for SORM
-ALIGNED = 1e-3  # 1 - |cos| between z* and grad g at a design point: beyond, FORM did not converge
+ALIGNED = 1e-6  # 1 - |cos| between z* and grad g at a design point (an angle of 1.4e-3 rad)
+SURFACE = 1e-7  # of |g(0)|: |g| at a design point
 MAX_ITERATIONS = 40
 
 
@@ -77,21 +78,30 @@ def design_point(limit_state: LimitState, dimensions: int) -> DesignPoint:
         return DesignPoint(origin, math.inf if g0 > 0 else -math.inf, gradient0, len(cache), False,
                            "the limit state does not change with the tolerances at the nominal hose")
     scale = abs(g0) if g0 != 0.0 else float(np.linalg.norm(gradient0))
+    def misalignment(z: np.ndarray) -> float:
+        g, gradient = evaluate(z)
+        norm = float(np.linalg.norm(z) * np.linalg.norm(gradient))
+        return 1.0 - abs(float(z @ gradient)) / norm if norm > 0.0 else 1.0
+
+    def converged(z: np.ndarray) -> bool:
+        return abs(evaluate(z)[0]) <= SURFACE * scale and misalignment(z) <= ALIGNED
+
+    def stop(z: np.ndarray) -> None:
+        if converged(z):
+            raise StopIteration
+
     start = -g0 * gradient0 / float(gradient0 @ gradient0)  # the design point of the linearised limit state
-    result = minimize(lambda z: 0.5 * float(z @ z), start, jac=lambda z: z, method="SLSQP",
+    result = minimize(lambda z: 0.5 * float(z @ z), start, jac=lambda z: z, method="SLSQP", callback=stop,
                       constraints=[{"type": "eq", "fun": lambda z: evaluate(z)[0] / scale,
                                     "jac": lambda z: evaluate(z)[1] / scale}],
-                      options={"maxiter": MAX_ITERATIONS, "ftol": 1e-10})
+                      options={"maxiter": MAX_ITERATIONS, "ftol": 1e-12})
     z = np.asarray(result.x, dtype=float)
     g, gradient = evaluate(z)
     beta = math.copysign(float(np.linalg.norm(z)), g0)
-    norm = float(np.linalg.norm(z) * np.linalg.norm(gradient))
-    aligned = norm > 0.0 and 1.0 - abs(float(z @ gradient)) / norm < ALIGNED
-    on_surface = abs(g) <= 1e-6 * scale
-    converged = bool(result.success and aligned and on_surface)
-    message = "" if converged else (f"SLSQP: {result.message}; |g| = {abs(g):.3g} at the last point, "
-                                    f"1 - cos(z, grad g) = {1.0 - abs(float(z @ gradient)) / norm if norm else 1.0:.3g}")
-    return DesignPoint(z, beta, gradient, len(cache), converged, message)
+    done = bool(np.isfinite(g) and converged(z))
+    message = "" if done else (f"SLSQP: {result.message}; |g| = {abs(g):.3g} at the last point, "
+                               f"1 - cos(z, grad g) = {misalignment(z):.3g}")
+    return DesignPoint(z, beta, gradient, len(cache), done, message)
 
 
 @dataclass(frozen=True)
