@@ -215,6 +215,8 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
      'reliability.limits[0] = "deviation": not a limit FORM can judge; choose one of bend_radius, end_torque'),
     ("end_torque = 2500.0", 'end_torque = 2500.0\n[reliability]\nmethod = "mc"', "reliability.method"),
     ("end_torque = 2500.0", "end_torque = 2500.0\n[reliability]\nimportance_samples = -1", "reliability.importance_samples"),
+    ("end_torque = 2500.0", "end_torque = 2500.0\n[sobol]\nsamples = 4", "sobol.samples"),
+    ("end_torque = 2500.0", "end_torque = 2500.0\n[sobol]\nrows = 4", "sobol.rows"),
 ])
 def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):
     """Exit code 2, one line naming the field and the fix, nothing written."""

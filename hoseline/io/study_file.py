@@ -67,6 +67,10 @@
     limits = ["end_torque"]            # optional: which limits (default: every limit but the deviation)
     seed = 0                           # of the importance samples
 
+    [sobol]                            # optional: Sobol' first-order and total indices per tolerance
+    samples = 256                      # N base rows of the Saltelli design: N (tolerances + 2) hoses
+    seed = 0
+
 Errors name the field, the value and the fix, as for problem files.
 """
 
@@ -84,7 +88,7 @@ from hoseline.procedures.variation.design_search import DesignGrid, default_rank
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
 from hoseline.procedures.variation.rare import Reliability
 from hoseline.procedures.variation.samples import StudyBase
-from hoseline.procedures.variation.study import Sampling, Study
+from hoseline.procedures.variation.study import GlobalSensitivity, Sampling, Study
 from hoseline.procedures.variation.tolerances import (DISTRIBUTIONS, PARAMETERS, Tolerance, Variation, clip_index,
                                                       fitting_axes, parameter_kind)
 
@@ -163,6 +167,13 @@ class ReliabilitySection(_Section):
     seed: Annotated[int, Field(ge=0)] = 0
 
 
+class SobolSection(_Section):
+    """[sobol]: the Saltelli design of the Sobol' indices."""
+
+    samples: Annotated[int, Field(ge=8, le=MAX_SAMPLES)] = 256
+    seed: Annotated[int, Field(ge=0)] = 0
+
+
 class StudyFile(_Section):
     """The whole study file."""
 
@@ -176,6 +187,7 @@ class StudyFile(_Section):
     limits: dict[str, float] = Field(default_factory=dict)
     design: DesignSection | None = None
     reliability: ReliabilitySection | None = None
+    sobol: SobolSection | None = None
 
     @model_validator(mode="after")
     def _something_to_do(self) -> "StudyFile":
@@ -208,7 +220,10 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
         raise StudyFileError(f"{path}: sampling.samples = 0 with [[vary]] tolerances: give at least 1 sample")
     design = _design(spec.design, base, limits, sampling, str(path)) if spec.design else None
     reliability = _reliability(spec.reliability, base, variation, limits, str(path)) if spec.reliability else None
-    study = Study(spec.name, base, variation, sampling, limits, spec.sensitivities, design, reliability)
+    if spec.sobol is not None and not spec.vary:
+        raise StudyFileError(f"{path}: [sobol] needs [[vary]] tolerances: give some, or remove [sobol]")
+    sobol = GlobalSensitivity(spec.sobol.samples, spec.sobol.seed) if spec.sobol is not None else None
+    study = Study(spec.name, base, variation, sampling, limits, spec.sensitivities, design, reliability, sobol)
     return study, text, base_path
 
 

@@ -237,6 +237,15 @@ def study_document(outcome: StudyOutcome) -> dict:
             name: dict(zip([t.name for t in study.variation.tolerances], first.contributions[k]))
             for k, name in enumerate(first.names)
         }
+    if outcome.sobol is not None:
+        sobol = outcome.sobol
+        labels = [t.name for t in study.variation.tolerances]
+        document["sobol"] = {
+            "base_rows": sobol.count, "rows_used": sobol.rows,
+            "indices": {name: {label: {"first": sobol.first[q, k], "first_ci95": [sobol.first_low[q, k], sobol.first_high[q, k]],
+                                       "total": sobol.total[q, k], "total_ci95": [sobol.total_low[q, k], sobol.total_high[q, k]]}
+                               for k, label in enumerate(labels)}
+                        for q, name in enumerate(names)}}
     if outcome.rare_events:
         document["rare_failures"] = [_rare_document(event, study) for event in outcome.rare_events]
     if outcome.design is not None:

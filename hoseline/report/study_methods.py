@@ -1,4 +1,5 @@
-"""Report tables of the study's methods beyond sampling: rare failures (FORM, SORM, importance sampling)."""
+"""Report tables of the study's methods beyond sampling: rare failures (FORM, SORM, importance sampling) and
+Sobol' indices beside the first-order shares of the tornado chart."""
 
 from __future__ import annotations
 
@@ -42,6 +43,43 @@ def rare_failure_section(outcome: StudyOutcome) -> list[str]:
             "with their sensitivities that FORM and SORM took. Each design point is written as "
             "design_point/QUANTITY/problem.toml.</p>")
     return ["<h2>Rare failures</h2>", text, "\n".join(rows)]
+
+
+def sobol_section(outcome: StudyOutcome) -> list[str]:
+    """The heading, explanation and one table per quantity of the Sobol' indices (empty without [sobol]); a quantity
+    whose first-order variance disagrees with the samples is flagged (its tornado shares are wrong)."""
+    sobol = outcome.sobol
+    if sobol is None:
+        return []
+    study = outcome.study
+    labels = [t.name for t in study.variation.tolerances]
+    first = outcome.first_order
+    parts = ["<h3>Which tolerance matters most (Sobol' indices)</h3>",
+             f"<p>From a Saltelli design of {sobol.count} base rows ({sobol.count * (len(labels) + 2)} hoses; "
+             f"{sobol.rows} rows with every hose solved). First order S: the share of the quantity's variance the "
+             "tolerance explains alone; total ST: the share it has a part in, with the others too. Beside them the "
+             "first-order (tornado) share, (contribution / first-order standard deviation)<sup>2</sup>, which is "
+             "right only where the response is linear over the tolerances. Brackets: 95 % bootstrap intervals.</p>"]
+    for q, quantity in enumerate(study.quantities):
+        flagged, shares = "", None
+        if first is not None and quantity.name in first.names:
+            k = first.names.index(quantity.name)
+            total = float(first.contributions[k] @ first.contributions[k])
+            shares = first.contributions[k] ** 2 / total if total > 0.0 else None
+            if not first.agreements[k].agrees:
+                flagged = (' <span class="bad">first order flagged wrong for this quantity: use the Sobol\' '
+                           "indices, not the tornado chart</span>")
+        rows = [f"<p><b>{html.escape(quantity.name)}</b>{flagged}</p>",
+                "<table><tr><th>tolerance</th><th>first-order share (tornado)</th><th>S</th><th>ST</th></tr>"]
+        for k, label in enumerate(labels):
+            rows.append(f"<tr><td>{html.escape(label)}</td><td class=\"number\">"
+                        f"{'' if shares is None else f'{shares[k]:.3f}'}</td>"
+                        f"<td class=\"number\">{sobol.first[q, k]:.3f} [{sobol.first_low[q, k]:.3f}, "
+                        f"{sobol.first_high[q, k]:.3f}]</td><td class=\"number\">{sobol.total[q, k]:.3f} "
+                        f"[{sobol.total_low[q, k]:.3f}, {sobol.total_high[q, k]:.3f}]</td></tr>")
+        rows.append("</table>")
+        parts.append("\n".join(rows))
+    return parts
 
 
 def _probability(value: float) -> str:

@@ -16,6 +16,7 @@ import numpy as np
 from hoseline.procedures.placement.continuation import PlacementError, Progress
 from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
+from hoseline.procedures.variation.global_sensitivity import sobol_indices
 from hoseline.procedures.variation.rare import RareEvent, RareTask, rare_event, standard_normal_deviations
 from hoseline.procedures.variation.reliability import importance_estimate, importance_points
 from hoseline.procedures.variation.scheduler import scheduler_address
@@ -89,6 +90,14 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
             cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose
             design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
             timings["design"] = time.perf_counter() - tick
+        sobol = None
+        if study.global_sensitivity is not None:
+            tick = time.perf_counter()
+            rows = _stage(engine, "sobol", context, study.sobol_coordinates(), study.sampling.batch_size(), stores,
+                          progress)
+            sobol = sobol_indices(rows["values"], study.global_sensitivity.samples, len(study.variation.tolerances),
+                                  study.global_sensitivity.seed)
+            timings["sobol"] = time.perf_counter() - tick
         rare_events = None
         if study.reliability is not None:
             tick = time.perf_counter()
@@ -111,6 +120,9 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     outcome.notes[:0] = notes
     outcome.design = design
     outcome.rare_events = rare_events or []
+    outcome.sobol = sobol
+    if sobol is not None and outcome.first_order is not None:
+        outcome.notes.extend(_sobol_notes(outcome))
     outcome.notes.extend(note for event in outcome.rare_events for note in event.notes())
     outcome.run = {
         "where": where.describe(),
@@ -119,6 +131,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         "seconds, nominal hose and sensitivities": timings["nominal"],
         "seconds, waiting for the cluster (after the nominal hose)": timings["cluster"],
         "seconds, samples": timings["samples"],
+        "seconds, Sobol' indices": timings.get("sobol"),
         "seconds, design search": timings.get("design"),
         "seconds, rare failures (FORM and importance sampling)": timings.get("rare"),
         "seconds, design optimiser": timings.get("optimiser"),
@@ -145,6 +158,15 @@ def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.nda
 
     engine.run(context, coordinates, batch_size, keep, done=set(batches))
     return merge_batches(batches)
+
+
+def _sobol_notes(outcome: StudyOutcome) -> list[str]:
+    """Where the first order is flagged wrong, the Sobol' indices to use instead."""
+    names = [q.name for q in outcome.study.quantities]
+    first = outcome.first_order
+    return [f"the first-order contributions (tornado) of {name} are wrong here: its Sobol' indices are in the report "
+            "and summary.json (their first-order and total shares need no linearity)"
+            for name, check in zip(first.names, first.agreements) if not check.agrees and name in names]
 
 
 def _rare_events(engine: Engine, context: StudyContext, study: Study, stores: Callable[[str], BatchStore],

@@ -18,6 +18,7 @@ from hoseline.procedures.variation.designs import balanced, unit_design
 from hoseline.procedures.variation.design_search import DesignGrid, DesignOutcome
 from hoseline.procedures.variation.engine import default_batch_size
 from hoseline.procedures.variation.quantities import Limit, Quantity, natural_scale, quantities
+from hoseline.procedures.variation.global_sensitivity import SobolIndices, saltelli_design
 from hoseline.procedures.variation.rare import RareEvent, Reliability
 from hoseline.procedures.variation.samples import StudyBase, failure_cause
 from hoseline.procedures.variation.sensitivity import Sensitivities
@@ -57,6 +58,14 @@ class Sampling:
 
 
 @dataclass(frozen=True)
+class GlobalSensitivity:
+    """What [sobol] asks: samples, the N base rows of the Saltelli design (N (tolerances + 2) hoses), and its seed."""
+
+    samples: int = 256
+    seed: int = 0
+
+
+@dataclass(frozen=True)
 class Study:
     """A study: name, the base (placement or sweep), the tolerances, the sampling, the limits,
     whether to compute the sensitivities, and an optional design search."""
@@ -69,6 +78,7 @@ class Study:
     sensitivities: bool = True
     design: DesignGrid | None = None
     reliability: Reliability | None = None
+    global_sensitivity: GlobalSensitivity | None = None
 
     @property
     def quantities(self) -> tuple[Quantity, ...]:
@@ -90,6 +100,12 @@ class Study:
             return np.zeros((0, self.variation.width))
         unit = unit_design(self.sampling.method, self.sampling.count, self.variation.dimensions, self.sampling.seed)
         return self.variation.coordinates(unit)
+
+    def sobol_coordinates(self) -> np.ndarray:
+        """(N (tolerances + 2), width) the deviations of the Saltelli design of [sobol] (global_sensitivity.py)."""
+        settings = self.global_sensitivity
+        groups = tuple(t.dimensions for t in self.variation.tolerances)
+        return self.variation.coordinates(saltelli_design(groups, settings.samples, settings.seed))
 
     def sample_problem(self, index: int) -> Problem:
         """The problem of sample `index` (to reproduce it)."""
@@ -149,6 +165,7 @@ class StudyOutcome:
     clearance: per obstacle and pose, P5/P50/P95 (O, 3, M) and minimum (O, M), mm.
     failures: the failed samples grouped by cause (FailureCause, most frequent first).  first_order: None without sensitivities.  design: None without search.
     rare_events: per limit of [reliability], FORM/SORM and the importance-sampling check (rare.RareEvent).
+    sobol: Sobol' indices of every quantity (quantities order) per tolerance, None without [sobol].
     notes: what a reader must know (unbalanced design, disagreement, failures).  run: figures of the run.
     """
 
@@ -167,6 +184,7 @@ class StudyOutcome:
     first_order: FirstOrder | None = None
     design: DesignOutcome | None = None
     rare_events: list[RareEvent] = field(default_factory=list)
+    sobol: SobolIndices | None = None
     notes: list[str] = field(default_factory=list)
     run: dict = field(default_factory=dict)
 
