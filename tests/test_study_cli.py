@@ -217,6 +217,8 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
     ("end_torque = 2500.0", "end_torque = 2500.0\n[reliability]\nimportance_samples = -1", "reliability.importance_samples"),
     ("end_torque = 2500.0", "end_torque = 2500.0\n[sobol]\nsamples = 4", "sobol.samples"),
     ("end_torque = 2500.0", "end_torque = 2500.0\n[sobol]\nrows = 4", "sobol.rows"),
+    ('base = "problem.toml"', 'base = "problem.toml"\nworst_case = true\nsensitivities = false',
+     "worst_case = true needs [[vary]] tolerances and sensitivities = true"),
 ])
 def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):
     """Exit code 2, one line naming the field and the fix, nothing written."""

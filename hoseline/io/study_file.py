@@ -3,6 +3,8 @@
     name = "brake hose as built"       # optional, default the file name
     base = "problem.toml"              # a problem file, or a sweep file ([[bodies]]), relative to this file
     sensitivities = true               # optional: derivatives and first-order variance
+    worst_case = false                 # optional: each quantity at its worst corner of the tolerances (needs the
+                                       #   sensitivities; unbounded distributions at +-3 standard deviations)
 
     [sampling]
     method = "sobol"                   # "monte-carlo", "latin-hypercube" or "sobol"
@@ -182,6 +184,7 @@ class StudyFile(_Section):
     name: str = "study"
     base: str
     sensitivities: bool = True
+    worst_case: bool = False
     sampling: SamplingSection = Field(default_factory=SamplingSection)
     vary: list[VarySection] = Field(default_factory=list)
     limits: dict[str, float] = Field(default_factory=dict)
@@ -223,7 +226,11 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
     if spec.sobol is not None and not spec.vary:
         raise StudyFileError(f"{path}: [sobol] needs [[vary]] tolerances: give some, or remove [sobol]")
     sobol = GlobalSensitivity(spec.sobol.samples, spec.sobol.seed) if spec.sobol is not None else None
-    study = Study(spec.name, base, variation, sampling, limits, spec.sensitivities, design, reliability, sobol)
+    if spec.worst_case and not (spec.vary and spec.sensitivities):
+        raise StudyFileError(f"{path}: worst_case = true needs [[vary]] tolerances and sensitivities = true (the corner "
+                             "of each quantity follows its derivatives): give them, or remove worst_case")
+    study = Study(spec.name, base, variation, sampling, limits, spec.sensitivities, design, reliability, sobol,
+                  spec.worst_case)
     return study, text, base_path
 
 

@@ -237,6 +237,15 @@ def study_document(outcome: StudyOutcome) -> dict:
             name: dict(zip([t.name for t in study.variation.tolerances], first.contributions[k]))
             for k, name in enumerate(first.names)
         }
+    if outcome.worst_cases:
+        variation = study.variation
+        document["worst_case"] = {
+            case.quantity.name: {
+                "unit": case.quantity.unit, "worse": "down" if case.quantity.sense == "at least" else "up",
+                "nominal": case.nominal, "first_order_worst": case.first_order, "solved_worst": case.solved,
+                "reason": case.reason or None,
+                "corner": {variation.names[k]: case.corner[k] for k in variation.varied}}
+            for case in outcome.worst_cases}
     if outcome.sobol is not None:
         sobol = outcome.sobol
         labels = [t.name for t in study.variation.tolerances]
@@ -294,6 +303,7 @@ def write_study_data(outcome: StudyOutcome, folder: Path, base_path: Path) -> No
             write_text(folder / "clearance_by_pose.csv", clearance_csv(outcome))
         _write_worst(outcome, folder, base_path)
     _write_design_points(outcome, folder, base_path)
+    _write_corners(outcome, folder, base_path)
     if outcome.first_order is not None:
         write_text(folder / "sensitivities.csv", sensitivities_csv(outcome))
     if outcome.design is not None:
@@ -328,6 +338,20 @@ def _write_design_points(outcome: StudyOutcome, folder: Path, base_path: Path) -
         target.mkdir(parents=True, exist_ok=True)
         header = (f"# the most probable failure point of {event.limit.describe()} in study '{study.name}': "
                   f"beta {event.point.beta:.4g}, FORM P {event.form:.3g}\n")
+        write_text(target / "problem.toml", header + problem_to_toml(problem))
+        if study.base.sweep is not None:
+            write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))
+
+
+def _write_corners(outcome: StudyOutcome, folder: Path, base_path: Path) -> None:
+    """worst_case/QUANTITY/problem.toml (and sweep.toml for a sweep): the hose at each quantity's worst-case corner."""
+    study = outcome.study
+    for case in outcome.worst_cases:
+        problem = perturbed(study.base.problem, case.corner)
+        target = folder / "worst_case" / case.quantity.name.replace(":", "_")
+        target.mkdir(parents=True, exist_ok=True)
+        header = (f"# the worst-case corner of {case.quantity.name} in study '{study.name}': first order "
+                  f"{case.first_order:.6g}, solved {case.solved:.6g} {case.quantity.unit}\n")
         write_text(target / "problem.toml", header + problem_to_toml(problem))
         if study.base.sweep is not None:
             write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))

@@ -2,6 +2,7 @@
 
 Sections: verdict (probability of breaking each limit with its 95 % interval), notes, rare failures (FORM), 3D envelope,
 distributions, first order beside Monte Carlo with the tornado chart and the station spreads, Sobol' indices,
+worst-case corners,
 clearance per pose (sweeps), the design search (ranked table, heat map), failures, the run, the input.
 """
 
@@ -23,7 +24,7 @@ from hoseline.report.study_figures import (
     tornado_figure,
     view_figure,
 )
-from hoseline.report.study_methods import rare_failure_section, sobol_section
+from hoseline.report.study_methods import rare_failure_section, sobol_section, worst_case_section
 from hoseline.report.sweep_html import STYLE, _format, _performance_table
 
 SAMPLES_LISTED = 20  # sample indexes shown per failure cause (summary.json lists them all)
@@ -64,6 +65,7 @@ def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_te
                       _first_order_table(outcome),
                       "<h3>Which tolerance matters most (first order)</h3>", _figure(tornado_figure(outcome))]
         parts += sobol_section(outcome)
+        parts += worst_case_section(outcome)
         parts += ["<h3>Spread along the hose</h3>", _figure(spread_figure(outcome))]
         if study.base.sweep is not None and study.base.obstacle_names:
             parts += ["<h2>Clearance per pose</h2>", _figure(clearance_figure(outcome))]

@@ -1,5 +1,6 @@
-"""Report tables of the study's methods beyond sampling: rare failures (FORM, SORM, importance sampling) and
-Sobol' indices beside the first-order shares of the tornado chart."""
+"""Report tables of the study's methods beyond sampling: rare failures (FORM, SORM, importance sampling),
+Sobol' indices beside the first-order shares of the tornado chart, and the worst-case corners beside the
+first order and Monte Carlo."""
 
 from __future__ import annotations
 
@@ -80,6 +81,39 @@ def sobol_section(outcome: StudyOutcome) -> list[str]:
         rows.append("</table>")
         parts.append("\n".join(rows))
     return parts
+
+
+def worst_case_section(outcome: StudyOutcome) -> list[str]:
+    """The heading, explanation and table of the worst-case corners (empty without worst_case)."""
+    if not outcome.worst_cases:
+        return []
+    variation = outcome.study.variation
+    names = [q.name for q in outcome.study.quantities]
+    first = outcome.first_order
+    rows = ["<table><tr><th>quantity</th><th>nominal</th><th>worst case, first order</th><th>worst case, solved</th>"
+            "<th>first order, 3 sigma</th><th>Monte Carlo extreme</th><th>corner</th></tr>"]
+    for case in outcome.worst_cases:
+        down = case.quantity.sense == "at least"
+        spread = outcome.spreads[names.index(case.quantity.name)] if outcome.spreads else None
+        sampled = "" if spread is None else _format(spread.minimum if down else spread.maximum)
+        three = ""
+        if first is not None and case.quantity.name in first.names:
+            k = first.names.index(case.quantity.name)
+            three = _format(float(first.mean[k] + (-3.0 if down else 3.0) * first.variance[k] ** 0.5))
+        corner = ", ".join(f"{variation.names[k]} {case.corner[k]:+.3g} {variation.units[k]}" for k in variation.varied
+                           if case.corner[k] != 0.0)
+        solved = _format(case.solved) if not case.reason else f"not solved: {html.escape(case.reason)}"
+        rows.append(f"<tr><td>{html.escape(case.quantity.name)} [{html.escape(case.quantity.unit)}]</td>"
+                    f"<td class=\"number\">{_format(case.nominal)}</td><td class=\"number\">{_format(case.first_order)}</td>"
+                    f"<td class=\"number\">{solved}</td><td class=\"number\">{three}</td>"
+                    f"<td class=\"number\">{sampled}</td><td>{html.escape(corner)}</td></tr>")
+    rows.append("</table>")
+    text = ("<p>Each quantity at the corner of the tolerances that makes it worst to first order (every tolerance at "
+            "the end of its range along the derivative: bounded ones at their bounds, normal and lognormal ones at "
+            "3 standard deviations, a sphere or cone at its rim): the linear worst-case stack, and the hose solved "
+            "at that corner (worst_case/QUANTITY/problem.toml). Beside them the first-order mean -/+ 3 standard "
+            "deviations and the most extreme sample.</p>")
+    return ["<h2>Worst case</h2>", text, "\n".join(rows)]
 
 
 def _probability(value: float) -> str:

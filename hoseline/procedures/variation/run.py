@@ -24,6 +24,7 @@ from hoseline.procedures.variation.samples import StudyContext, nominal_context
 from hoseline.procedures.variation.sensitivity import placement_sensitivities
 from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
 from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities
+from hoseline.procedures.variation.worst_case import WorstCase, worst_cases
 
 
 class BatchStore(Protocol):
@@ -90,6 +91,11 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
             cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose
             design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
             timings["design"] = time.perf_counter() - tick
+        corners = None
+        if study.worst_case and sensitivities is not None:
+            tick = time.perf_counter()
+            corners = _worst_cases(engine, replace(context, warm=None), study, sensitivities, stores, progress)
+            timings["corners"] = time.perf_counter() - tick
         sobol = None
         if study.global_sensitivity is not None:
             tick = time.perf_counter()
@@ -121,6 +127,9 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     outcome.design = design
     outcome.rare_events = rare_events or []
     outcome.sobol = sobol
+    outcome.worst_cases = corners or []
+    if study.worst_case and sensitivities is None:
+        outcome.notes.append("no worst-case corners: they follow the sensitivities, which this study has not")
     if sobol is not None and outcome.first_order is not None:
         outcome.notes.extend(_sobol_notes(outcome))
     outcome.notes.extend(note for event in outcome.rare_events for note in event.notes())
@@ -131,6 +140,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         "seconds, nominal hose and sensitivities": timings["nominal"],
         "seconds, waiting for the cluster (after the nominal hose)": timings["cluster"],
         "seconds, samples": timings["samples"],
+        "seconds, worst-case corners": timings.get("corners"),
         "seconds, Sobol' indices": timings.get("sobol"),
         "seconds, design search": timings.get("design"),
         "seconds, rare failures (FORM and importance sampling)": timings.get("rare"),
@@ -158,6 +168,20 @@ def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.nda
 
     engine.run(context, coordinates, batch_size, keep, done=set(batches))
     return merge_batches(batches)
+
+
+def _worst_cases(engine: Engine, context: StudyContext, study: Study, sensitivities, stores: Callable[[str], BatchStore],
+                 progress: Progress | None) -> list[WorstCase]:
+    """The worst-case corner of every smooth quantity from the sensitivities, each hose solved there (a stage)."""
+    by_name = {q.name: q for q in study.quantities}
+    cases = worst_cases(study.variation, tuple(by_name[name] for name in sensitivities.names), sensitivities.values,
+                        sensitivities.derivatives)
+    solved = _stage(engine, "corners", context, np.array([case.corner for case in cases]), 1, stores, progress)
+    names = [q.name for q in study.quantities]
+    for row, case in enumerate(cases):
+        case.solved = float(solved["values"][row, names.index(case.quantity.name)])
+        case.reason = str(solved["reason"][row])
+    return cases
 
 
 def _sobol_notes(outcome: StudyOutcome) -> list[str]:

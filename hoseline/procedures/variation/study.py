@@ -34,6 +34,7 @@ from hoseline.procedures.variation.statistics import (
     worst_sample,
 )
 from hoseline.procedures.variation.tolerances import Variation, perturbed
+from hoseline.procedures.variation.worst_case import WorstCase
 
 
 STARTS = ("straight", "nominal")
@@ -68,7 +69,8 @@ class GlobalSensitivity:
 @dataclass(frozen=True)
 class Study:
     """A study: name, the base (placement or sweep), the tolerances, the sampling, the limits,
-    whether to compute the sensitivities, and an optional design search."""
+    whether to compute the sensitivities, and an optional design search; reliability: FORM of the limits;
+    global_sensitivity: Sobol' indices; worst_case: the worst-case corners (they need the sensitivities)."""
 
     name: str
     base: StudyBase
@@ -79,6 +81,7 @@ class Study:
     design: DesignGrid | None = None
     reliability: Reliability | None = None
     global_sensitivity: GlobalSensitivity | None = None
+    worst_case: bool = False
 
     @property
     def quantities(self) -> tuple[Quantity, ...]:
@@ -166,6 +169,7 @@ class StudyOutcome:
     failures: the failed samples grouped by cause (FailureCause, most frequent first).  first_order: None without sensitivities.  design: None without search.
     rare_events: per limit of [reliability], FORM/SORM and the importance-sampling check (rare.RareEvent).
     sobol: Sobol' indices of every quantity (quantities order) per tolerance, None without [sobol].
+    worst_cases: per smooth quantity its worst-case corner, first-order and solved (worst_case.WorstCase).
     notes: what a reader must know (unbalanced design, disagreement, failures).  run: figures of the run.
     """
 
@@ -185,6 +189,7 @@ class StudyOutcome:
     design: DesignOutcome | None = None
     rare_events: list[RareEvent] = field(default_factory=list)
     sobol: SobolIndices | None = None
+    worst_cases: list[WorstCase] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     run: dict = field(default_factory=dict)
 
