@@ -60,6 +60,8 @@ def study_command(
             Console().print(_limits_table(outcome))
         if outcome.rare_events:
             Console().print(_rare_table(outcome))
+        if outcome.worst_cases:
+            Console().print(_worst_case_table(outcome))
         for note in outcome.notes:
             Console().print(f"[yellow]note:[/] {note}", soft_wrap=True)
         if outcome.design is not None:
@@ -93,4 +95,15 @@ def _rare_table(outcome) -> Table:
                       "" if event.sorm is None else f"{event.sorm:.3g}",
                       "" if check is None else f"{check.estimate:.3g}",
                       "" if check is None else f"[{check.low:.3g}, {check.high:.3g}]", str(event.evaluations))
+    return table
+
+
+def _worst_case_table(outcome) -> Table:
+    """Each quantity's worst-case corner: the linear stack and the hose solved there, as a Rich table."""
+    table = Table(title="worst case (corners in worst_case/)")
+    for column in ("quantity", "nominal", "worst, first order", "worst, solved"):
+        table.add_column(column)
+    for case in outcome.worst_cases:
+        table.add_row(f"{case.quantity.name} [{case.quantity.unit}]", f"{case.nominal:.4g}", f"{case.first_order:.4g}",
+                      f"{case.solved:.4g}" if not case.reason else "not solved")
     return table
