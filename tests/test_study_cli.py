@@ -187,6 +187,24 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
     assert "d clearance:post [mm per unit]" in rows[0] and "first_order" in summary
 
 
+def test_a_rub_in_a_sweep_has_its_most_probable_failure_point_as_a_sweep_file(sweep_study, tmp_path):
+    """[reliability] on a sweep: FORM's design point of the clearance to the post, written as
+    design_point/clearance_post/sweep.toml, swept again by `hoseline sweep`'s code, has the limit's least clearance
+    (the design point lies on the failure surface)."""
+    (tmp_path / "post.stl").write_bytes((sweep_study / "post.stl").read_bytes())
+    (tmp_path / "sweep.toml").write_text(SWEEP_FILE, encoding="utf-8")
+    text = (SWEEP_STUDY.replace("samples = 6", "samples = 2") + '[limits]\n"clearance:post" = -1.6\n'
+            '[reliability]\nlimits = ["clearance:post"]\nimportance_samples = 4\n')
+    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"), "--workers", "0", "-q")
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text(encoding="utf-8"))
+    rub = summary["rare_failures"][0]
+    assert rub["converged"] and rub["quantity"] == "clearance:post"
+    again = run_sweep(load_sweep(tmp_path / "out" / "design_point" / "clearance_post" / "sweep.toml"))
+    assert again.clearances[0].distance.min() == pytest.approx(-1.6, abs=1e-6)
+
+
 @pytest.mark.parametrize("old, new, message", [
     ('parameter = "hose.bending_stiffness"', 'parameter = "hose.bending_stiff"', 'vary[2].parameter'),
     ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "sphere"\nradius = 1.0', "does not apply"),

@@ -8,6 +8,7 @@ of the surface g = 0 nearest the origin,
     z* = argmin |z|^2 / 2  subject to  g(z) = 0,
 
 here by SciPy's SLSQP with the exact gradient of g (each evaluation one solve with its sensitivities),
+within |z_i| <= 7 (beyond, the unit point Phi(z) is within 1e-12 of its ends, where the samples clip it),
 stopped when |g| <= 1e-7 |g(0)| and z is parallel to grad g (1 - cos <= 1e-6), and takes P(failure) = Phi(-beta), beta = |z*| signed by g(0) (negative when the nominal already breaks
 the limit).  SORM (Breitung 1984) corrects for the surface's curvature at z*:
 
@@ -38,6 +39,7 @@ CURVATURE_STEP = 0.1  # standard deviations: the step of the central differences
 ALIGNED = 1e-6  # 1 - |cos| between z* and grad g at a design point (an angle of 1.4e-3 rad)
 SURFACE = 1e-7  # of |g(0)|: |g| at a design point
 MAX_ITERATIONS = 40
+BOUND = 7.0  # standard deviations: the search stays within |z_i| <= BOUND, where Phi(z) is still resolved (1e-12)
 
 
 @dataclass(frozen=True)
@@ -90,8 +92,9 @@ def design_point(limit_state: LimitState, dimensions: int) -> DesignPoint:
         if converged(z):
             raise StopIteration
 
-    start = -g0 * gradient0 / float(gradient0 @ gradient0)  # the design point of the linearised limit state
+    start = np.clip(-g0 * gradient0 / float(gradient0 @ gradient0), -BOUND, BOUND)  # that of the linearised g
     result = minimize(lambda z: 0.5 * float(z @ z), start, jac=lambda z: z, method="SLSQP", callback=stop,
+                      bounds=[(-BOUND, BOUND)] * dimensions,
                       constraints=[{"type": "eq", "fun": lambda z: evaluate(z)[0] / scale,
                                     "jac": lambda z: evaluate(z)[1] / scale}],
                       options={"maxiter": MAX_ITERATIONS, "ftol": 1e-12})
@@ -100,7 +103,10 @@ def design_point(limit_state: LimitState, dimensions: int) -> DesignPoint:
     beta = math.copysign(float(np.linalg.norm(z)), g0)
     done = bool(np.isfinite(g) and converged(z))
     message = "" if done else (f"SLSQP: {result.message}; |g| = {abs(g):.3g} at the last point, "
-                               f"1 - cos(z, grad g) = {misalignment(z):.3g}")
+                               f"1 - cos(z, grad g) = {misalignment(z):.3g}"
+                               + (f"; the search reached the bound |z| = {BOUND:g} of a tolerance: the failure is "
+                                  f"further out, its probability far below Phi(-{BOUND:g}) = {ndtr(-BOUND):.1g}"
+                                  if np.any(np.abs(z) >= BOUND - 1e-9) and g * g0 > 0.0 else ""))
     return DesignPoint(z, beta, gradient, len(cache), done, message)
 
 
