@@ -1,6 +1,6 @@
 """Benchmark: a rare failure by FORM, SORM and importance sampling, counting the placements.
 
-    python bench/bench_rare.py [--limit 560] [--quantity end_torque] [--importance 100] [--segments 100]
+    python bench/bench_rare.py [--limit 10500] [--quantity end_torque] [--importance 100] [--segments 100]
 
 The thesis hose placement (to its 180 degrees of twist) with the tolerances of bench_study.py but the length
 normal (the end mount within a 1 mm sphere, its direction within a 2 degree cone, the length +-1 mm and 1 %
@@ -46,7 +46,7 @@ TOLERANCES = Variation((
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quantity", default="end_torque")
-    parser.add_argument("--limit", type=float, default=560.0)
+    parser.add_argument("--limit", type=float, default=10500.0)
     parser.add_argument("--importance", type=int, default=100)
     parser.add_argument("--segments", type=int, default=100)
     args = parser.parse_args()
