@@ -30,7 +30,6 @@ from hoseline.procedures.variation.samples import SOLVER_FAILURES, StudyBase, St
 from hoseline.procedures.variation.tolerances import (CLIP_COORDINATES, COORDINATES, INDEX, Variation, _turned,
                                                       perturbed, tilt_axes)
 
-METHODS = ("form", "sorm")
 MAPPING_STEP = 1e-5  # standard deviations: central differences of the deviations along z
 TILT_STEP = 1e-4  # degrees: central differences of a turned direction
 RELATIVE = ("bend_radius", "end_torque", "twist_rate")  # positive by nature: their margins are taken as logarithms
@@ -142,13 +141,8 @@ class RareTask:
 def rare_event(context: StudyContext, task: RareTask) -> dict[str, np.ndarray]:
     """FORM (and SORM) of one limit (a Dask task); arrays for RareEvent.from_arrays."""
     g = limit_state(task.variation, hose_margin(context.base, task.variation, task.limit))
-    d = task.variation.dimensions
-    try:
-        point = design_point(g, d)
-        found = curvatures(g, point) if task.sorm and point.converged else None
-    except SOLVER_FAILURES as exc:  # the hose cannot be solved on the way to the design point
-        nan = np.full(d, np.nan)
-        point, found = DesignPoint(nan, math.nan, nan, 0, False, f"{type(exc).__name__}: {exc}"), None
+    point = design_point(g, task.variation.dimensions)
+    found = curvatures(g, point) if task.sorm and point.converged else None
     return {"design_point": point.design_point, "beta": np.array(point.beta), "gradient": point.gradient,
             "evaluations": np.array(point.evaluations), "converged": np.array(point.converged),
             "message": np.array(point.message),

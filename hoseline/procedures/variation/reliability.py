@@ -9,8 +9,8 @@ of the surface g = 0 nearest the origin,
 
 here by SciPy's SLSQP with the exact gradient of g (each evaluation one solve with its sensitivities),
 within |z_i| <= 7 (beyond, the unit point Phi(z) is within 1e-12 of its ends, where the samples clip it),
-stopped when |g| <= 1e-7 |g(0)| and z is parallel to grad g (1 - cos <= 1e-6), and takes P(failure) = Phi(-beta), beta = |z*| signed by g(0) (negative when the nominal already breaks
-the limit).  SORM (Breitung 1984) corrects for the surface's curvature at z*:
+stopped when |g| <= 1e-7 |g(0)| and z is parallel to grad g (1 - cos <= 1e-6), and takes
+P(failure) = Phi(-beta), beta = |z*| signed by g(0) (negative when the nominal already breaks the limit).  SORM (Breitung 1984) corrects for the surface's curvature at z*:
 
     P = Phi(-beta) prod_i (1 + beta kappa_i)^(-1/2),
 
@@ -140,6 +140,8 @@ def curvatures(limit_state: LimitState, point: DesignPoint, step: float = CURVAT
         behind = limit_state(point.design_point - step * basis[:, k])[1]
         columns.append(basis.T @ (ahead - behind) / (2.0 * step))
     hessian = np.array(columns).reshape(basis.shape[1], basis.shape[1])
+    if not np.all(np.isfinite(hessian)):  # a hose beside the design point could not be solved
+        return Curvatures(np.full(basis.shape[1], np.nan), 2 * basis.shape[1])
     return Curvatures(np.linalg.eigvalsh(0.5 * (hessian + hessian.T)) / norm, 2 * basis.shape[1])
 
 
