@@ -18,7 +18,8 @@ from hoseline.commands.common import BAD_INPUT, OUT_HELP, QUIET_HELP, errors_to_
 
 def study_command(
     study_file: Path = typer.Argument(..., help="TOML study file: a base problem or sweep file, \\[\\[vary]] "
-                                                "tolerances, \\[sampling], \\[limits], \\[design] (see docs/variation.md)"),
+                                                "tolerances, \\[sampling], \\[limits], \\[design], \\[reliability] "
+                                                "(FORM/SORM), \\[sobol], worst_case (see docs/variation.md)"),
     out: Path = typer.Option(..., "-o", "--out", help=OUT_HELP),
     scheduler: str = typer.Option(None, "--scheduler", help="an existing Dask cluster: tcp://HOST:PORT or a scheduler "
                                                             "file (default: a LocalCluster on this machine)"),
@@ -26,7 +27,8 @@ def study_command(
                                                                "per core; 0: in this process, without Dask)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
 ) -> None:
-    """Sample the tolerances of a hose (and search lengths and clockings); write report.html, envelope.stl and tables."""
+    """Sample the tolerances of a hose (and search lengths and clockings; rare failures by FORM, Sobol' indices,
+    worst-case corners); write report.html, envelope.stl and tables."""
     from hoseline.procedures.variation.scheduler import ClusterError, scheduler_address
 
     if scheduler is not None and workers is not None:
