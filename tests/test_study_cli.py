@@ -291,6 +291,9 @@ def test_the_most_probable_failure_point_is_a_problem_file_on_the_limit(tmp_path
     summary = json.loads((tmp_path / "out" / "summary.json").read_text(encoding="utf-8"))
     torque = next(r for r in summary["rare_failures"] if r["quantity"] == "end_torque")
     assert torque["converged"] and torque["importance_sampling"]["samples"] == 8
+    either = summary["rare_failures_any"]  # bend radius or end torque: at least the likelier of the two
+    assert either["importance_sampling"]["samples"] == 16
+    assert either["form_probability"] >= 0.99 * max(r["form_probability"] for r in summary["rare_failures"])
     placed = solve(load_problem(tmp_path / "out" / "design_point" / "end_torque" / "problem.toml"), estimate_error=False)
     assert abs(float(placed.end_moment @ placed.problem.end.direction)) == pytest.approx(2500.0, rel=1e-6)
     assert "Rare failures" in (tmp_path / "out" / "report.html").read_text(encoding="utf-8")

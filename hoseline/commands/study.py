@@ -97,6 +97,12 @@ def _rare_table(outcome) -> Table:
                       "" if event.sorm is None else f"{event.sorm:.3g}",
                       "" if check is None else f"{check.estimate:.3g}",
                       "" if check is None else f"[{check.low:.3g}, {check.high:.3g}]", str(event.evaluations))
+    union = outcome.rare_union
+    if union is not None:
+        check = union.importance
+        table.add_row(f"any of these {len(union.limits)}", "", f"{union.form:.3g}", "",
+                      "" if check is None else f"{check.estimate:.3g}",
+                      "" if check is None else f"[{check.low:.3g}, {check.high:.3g}]", "")
     return table
 
 

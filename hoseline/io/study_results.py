@@ -257,6 +257,13 @@ def study_document(outcome: StudyOutcome) -> dict:
                         for q, name in enumerate(names)}}
     if outcome.rare_events:
         document["rare_failures"] = [_rare_document(event, study) for event in outcome.rare_events]
+    if outcome.rare_union is not None:
+        union, check = outcome.rare_union, outcome.rare_union.importance
+        document["rare_failures_any"] = {
+            "limits": [limit.describe() for limit in union.limits], "form_probability": union.form,
+            "importance_sampling": None if check is None else {
+                "probability": check.estimate, "standard_error": check.standard_error, "ci95": [check.low, check.high],
+                "samples": check.samples, "failed": check.failed, "ci95_high_counting_failed": check.high_with_failed}}
     if outcome.design is not None:
         design = outcome.design
         document["design"] = {"lengths_mm": list(design.grid.lengths), "clockings_deg": list(design.grid.clockings),

@@ -35,6 +35,17 @@ def rare_failure_section(outcome: StudyOutcome) -> list[str]:
                f"<td class=\"number\">{check.samples} ({check.failed})</td>" if check is not None
                else "<td></td><td></td><td></td>")
             + f"<td class=\"number\">{event.evaluations}</td><td>{point}</td></tr>")
+    union = outcome.rare_union
+    if union is not None:
+        check = union.importance
+        rows.append(f"<tr><td>any of these {len(union.limits)}</td><td></td><td class=\"number\">"
+                    f"{_probability(union.form)}</td><td></td>"
+                    + (f"<td class=\"number\">{_probability(check.estimate)}</td>"
+                       f"<td class=\"number\">[{check.low:.3g}, {check.high:.3g}]</td>"
+                       f"<td class=\"number\">{check.samples} ({check.failed})</td>" if check is not None
+                       else "<td></td><td></td><td></td>")
+                    + "<td></td><td>FORM: the union of the limits' tangent half-spaces; importance sampling: every "
+                    "design point's samples pooled</td></tr>")
     rows.append("</table>")
     text = ("<p>FORM: the most probable failure point (the design point) is the hose with the tolerances nearest "
             "the nominal, in standard normal units, that breaks the limit; beta is its distance and Phi(-beta) the "

@@ -10,7 +10,8 @@ whose tilt axes turn with them), times d(deviations)/dz (central differences of 
 inverses, no solve).  One evaluation is one solve of the hose with its sensitivities.
 
 rare_event runs FORM (and SORM) for one limit; it is a Dask task.  The importance samples are ordinary
-study samples (samples.evaluate_batch) at deviations around the design point, run by run.py.
+study samples (samples.evaluate_batch) at deviations around the design point, run by run.py; pooled, they
+also give the probability of breaking any of the limits (RareUnion).
 """
 
 from __future__ import annotations
@@ -204,3 +205,12 @@ class RareEvent:
                                  "is not flat near the design point (or there are several); trust the sampled estimate")
         return notes
 
+
+@dataclass(frozen=True)
+class RareUnion:
+    """P(breaking any of several limits): limits, form (their tangent half-spaces' union, reliability.union_first_order)
+    and importance (every design point's importance samples pooled, mixture weights; None without them)."""
+
+    limits: tuple[Limit, ...]
+    form: float
+    importance: ImportanceEstimate | None

@@ -20,7 +20,10 @@ of the exact gradient along an orthonormal basis of the tangent plane (2 (d - 1)
 
 Importance sampling checks either: z ~ N(z*, I), each sample weighted by phi(z) / phi(z - z*) =
 exp(-z.z* + |z*|^2 / 2); the estimate is the weighted fraction of failures, its standard error the
-standard deviation of the weighted indicator over sqrt(n).
+standard deviation of the weighted indicator over sqrt(n).  Several limits at once (P of breaking any):
+the samples of every design point pooled, each weighted by phi(z) over the mixture of the normals they
+were drawn from (multiple importance sampling, the balance heuristic), and to first order the union of
+the limits' tangent half-spaces, sampled the same way without solving anything (union_first_order).
 """
 
 from __future__ import annotations
@@ -170,9 +173,19 @@ def importance_points(center: np.ndarray, count: int, seed: int) -> np.ndarray:
     return center + np.random.default_rng(seed).standard_normal((count, center.size))
 
 
-def importance_estimate(points: np.ndarray, center: np.ndarray, margins: np.ndarray) -> ImportanceEstimate:
-    """P(g < 0) from margins (n,) (g at each point; NaN: not solved) at `points` (n, d) ~ N(center, I)."""
-    weights = np.exp(-points @ center + 0.5 * float(center @ center))
+def mixture_weights(points: np.ndarray, centers: np.ndarray) -> np.ndarray:
+    """(n,) phi(z) / q(z) at `points` (n, d) drawn in equal numbers from N(c, I) of each of `centers` (k, d): the
+    mixture q = mean_k phi(z - c_k) (the balance heuristic of multiple importance sampling; k = 1: one center)."""
+    centers = np.atleast_2d(centers)
+    exponents = points @ centers.T - 0.5 * np.sum(centers**2, axis=1)  # ln phi(z - c) - ln phi(z)
+    largest = np.max(exponents, axis=1)
+    return 1.0 / (np.exp(largest) * np.mean(np.exp(exponents - largest[:, None]), axis=1))
+
+
+def importance_estimate(points: np.ndarray, centers: np.ndarray, margins: np.ndarray) -> ImportanceEstimate:
+    """P(g < 0) from margins (n,) (g at each point; NaN: not solved) at `points` (n, d) drawn in equal numbers from
+    N(c, I) of each of `centers` (k, d), or (d,) for one."""
+    weights = mixture_weights(points, centers)
     solved = np.isfinite(margins)
     n = int(solved.sum())
     if n < 2:
@@ -186,3 +199,12 @@ def importance_estimate(points: np.ndarray, center: np.ndarray, margins: np.ndar
     return ImportanceEstimate(estimate, error, max(estimate - half, 0.0), estimate + half, n, int((~solved).sum()),
                               max(with_failed, 0.0) + half)
 
+
+def union_first_order(points: list[DesignPoint], count: int, seed: int) -> float:
+    """P(breaking any of the limits) to first order: the union of the half-spaces grad g_k . (z - z*_k) < 0 (each
+    limit linearised at its design point), by `count` draws from the mixture of N(z*_k, I), no solve."""
+    centers = np.array([p.design_point for p in points])
+    each = count // len(points)
+    shifted = importance_points(np.zeros(centers.shape[1]), each * len(points), seed) + np.repeat(centers, each, axis=0)
+    broken = np.any([(shifted - p.design_point) @ p.gradient < 0.0 for p in points], axis=0)
+    return float(np.mean(np.where(broken, mixture_weights(shifted, centers), 0.0)))

@@ -17,14 +17,17 @@ from hoseline.procedures.placement.continuation import PlacementError, Progress
 from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
 from hoseline.procedures.variation.global_sensitivity import sobol_indices
-from hoseline.procedures.variation.rare import RareEvent, RareTask, rare_event, standard_normal_deviations
-from hoseline.procedures.variation.reliability import importance_estimate, importance_points
+from hoseline.procedures.variation.rare import RareEvent, RareTask, RareUnion, rare_event, standard_normal_deviations
+from hoseline.procedures.variation.reliability import importance_estimate, importance_points, union_first_order
 from hoseline.procedures.variation.scheduler import scheduler_address
 from hoseline.procedures.variation.samples import StudyContext, nominal_context
 from hoseline.procedures.variation.sensitivity import placement_sensitivities
 from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
 from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities
 from hoseline.procedures.variation.worst_case import WorstCase, worst_cases
+
+
+UNION_DRAWS = 100_000  # draws of the first-order union of the limits' half-spaces (no solve; 1 % at 1e-3)
 
 
 class BatchStore(Protocol):
@@ -104,10 +107,10 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
             sobol = sobol_indices(rows["values"], study.global_sensitivity.samples, len(study.variation.tolerances),
                                   study.global_sensitivity.seed)
             timings["sobol"] = time.perf_counter() - tick
-        rare_events = None
+        rare_events, rare_union = None, None
         if study.reliability is not None:
             tick = time.perf_counter()
-            rare_events = _rare_events(engine, replace(context, warm=None), study, stores, progress)
+            rare_events, rare_union = _rare_events(engine, replace(context, warm=None), study, stores, progress)
             timings["rare"] = time.perf_counter() - tick
         design = None
         if design_samples is not None:
@@ -126,6 +129,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     outcome.notes[:0] = notes
     outcome.design = design
     outcome.rare_events = rare_events or []
+    outcome.rare_union = rare_union
     outcome.sobol = sobol
     outcome.worst_cases = corners or []
     if study.worst_case and sensitivities is None:
@@ -194,9 +198,10 @@ def _sobol_notes(outcome: StudyOutcome) -> list[str]:
 
 
 def _rare_events(engine: Engine, context: StudyContext, study: Study, stores: Callable[[str], BatchStore],
-                 progress: Progress | None) -> list[RareEvent]:
+                 progress: Progress | None) -> tuple[list[RareEvent], RareUnion | None]:
     """FORM (and SORM) of every limit the study's [reliability] names (one task each, kept in the "form" store),
-    then the importance samples around each design point (a stage of samples each)."""
+    then the importance samples around each design point (a stage of samples each); and, of two limits or more
+    with a design point, the probability of breaking any of them."""
     options = study.reliability
     limits = study.reliability_limits()
     sorm = options.method == "sorm"
@@ -213,6 +218,8 @@ def _rare_events(engine: Engine, context: StudyContext, study: Study, stores: Ca
     engine.map(rare_event, context, tasks, keep, done=set(results))
     events = [RareEvent.from_arrays(limit, study.variation, results[k], sorm) for k, limit in enumerate(limits)]
     names = [q.name for q in study.quantities]
+    columns = [names.index(limit.quantity.name) for limit in limits]
+    drawn = []  # (event, its points, every limit's margin there)
     for k, event in enumerate(events):
         if options.importance_samples == 0 or not np.all(np.isfinite(event.point.design_point)):
             continue
@@ -220,9 +227,21 @@ def _rare_events(engine: Engine, context: StudyContext, study: Study, stores: Ca
         deviations = standard_normal_deviations(study.variation, points)
         samples = _stage(engine, f"importance_{k}", context, deviations, default_batch_size(len(points)), stores,
                          progress)
-        margins = event.limit.margin(samples["values"][:, names.index(event.limit.quantity.name)])
-        event.importance = importance_estimate(points, event.point.design_point, margins)
-    return events
+        margins = np.column_stack([limit.margin(samples["values"][:, q]) for limit, q in zip(limits, columns)])
+        event.importance = importance_estimate(points, event.point.design_point, margins[:, k])
+        if event.point.converged:
+            drawn.append((event, points, margins))
+    found = [event for event in events if event.point.converged]
+    if len(found) < 2:
+        return events, None
+    form = union_first_order([event.point for event in found], UNION_DRAWS, options.seed)
+    pooled = None
+    if len(drawn) == len(found):
+        centers = np.array([event.point.design_point for event, _, _ in drawn])
+        chosen = [limits.index(event.limit) for event in found]
+        pooled = importance_estimate(np.vstack([points for _, points, _ in drawn]), centers,
+                                     np.vstack([margins for _, _, margins in drawn])[:, chosen].min(axis=1))
+    return events, RareUnion(tuple(event.limit for event in found), form, pooled)
 
 
 def _refine(engine: Engine, context: StudyContext, tasks: list[RefineTask], stores: Callable[[str], BatchStore],

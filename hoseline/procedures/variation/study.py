@@ -19,7 +19,7 @@ from hoseline.procedures.variation.design_search import DesignGrid, DesignOutcom
 from hoseline.procedures.variation.engine import default_batch_size
 from hoseline.procedures.variation.quantities import Limit, Quantity, natural_scale, quantities
 from hoseline.procedures.variation.global_sensitivity import SobolIndices, saltelli_design
-from hoseline.procedures.variation.rare import RareEvent, Reliability
+from hoseline.procedures.variation.rare import RareEvent, RareUnion, Reliability
 from hoseline.procedures.variation.samples import StudyBase, failure_cause
 from hoseline.procedures.variation.sensitivity import Sensitivities
 from hoseline.procedures.variation.statistics import (
@@ -167,7 +167,8 @@ class StudyOutcome:
     deviation: per station P5/P50/P95 (3, N+1) and the maximum (N+1,) of the distance from nominal, mm.
     clearance: per obstacle and pose, P5/P50/P95 (O, 3, M) and minimum (O, M), mm.
     failures: the failed samples grouped by cause (FailureCause, most frequent first).  first_order: None without sensitivities.  design: None without search.
-    rare_events: per limit of [reliability], FORM/SORM and the importance-sampling check (rare.RareEvent).
+    rare_events: per limit of [reliability], FORM/SORM and the importance-sampling check (rare.RareEvent);
+    rare_union: the probability of breaking any of them (two or more with a design point; else None).
     sobol: Sobol' indices of every quantity (quantities order) per tolerance, None without [sobol].
     worst_cases: per smooth quantity its worst-case corner, first-order and solved (worst_case.WorstCase).
     notes: what a reader must know (unbalanced design, disagreement, failures).  run: figures of the run.
@@ -188,6 +189,7 @@ class StudyOutcome:
     first_order: FirstOrder | None = None
     design: DesignOutcome | None = None
     rare_events: list[RareEvent] = field(default_factory=list)
+    rare_union: RareUnion | None = None
     sobol: SobolIndices | None = None
     worst_cases: list[WorstCase] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
