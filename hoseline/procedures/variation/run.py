@@ -1,4 +1,5 @@
-"""A study from start to end: the nominal hose, the sensitivities, the samples, the design search, the outcome.
+"""A study from start to end: the nominal hose, the sensitivities, the samples, the worst-case corners, the Sobol'
+indices, the rare failures (FORM and importance sampling), the design search, the outcome.
 
 Batches go through a store (anything with finished() and save(k, arrays); io/study_results.py
 keeps them as files so an interrupted study resumes): finished batches are not run again.
@@ -55,7 +56,8 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
               progress: Progress | None = None) -> StudyOutcome:
     """Run `study` and return its outcome.
 
-    stores: stage name ("samples", "design", "optimise") -> its BatchStore (default: in memory).  where: where the
+    stores: stage name ("samples", "design", "optimise", "corners", "sobol", "form", "importance_K") -> its BatchStore
+    (default: in memory).  where: where the
     batches run.  progress: callable(phase, fraction).  Raises PlacementError when the nominal hose
     cannot be solved, ClusterError at once (before any solving) when an existing cluster cannot be reached.
     """
@@ -190,11 +192,10 @@ def _worst_cases(engine: Engine, context: StudyContext, study: Study, sensitivit
 
 def _sobol_notes(outcome: StudyOutcome) -> list[str]:
     """Where the first order is flagged wrong, the Sobol' indices to use instead."""
-    names = [q.name for q in outcome.study.quantities]
     first = outcome.first_order
     return [f"the first-order contributions (tornado) of {name} are wrong here: its Sobol' indices are in the report "
             "and summary.json (their first-order and total shares need no linearity)"
-            for name, check in zip(first.names, first.agreements) if not check.agrees and name in names]
+            for name, check in zip(first.names, first.agreements) if not check.agrees]
 
 
 def _rare_events(engine: Engine, context: StudyContext, study: Study, stores: Callable[[str], BatchStore],
