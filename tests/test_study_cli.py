@@ -187,6 +187,24 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
     assert "d clearance:post [mm per unit]" in rows[0] and "first_order" in summary
 
 
+def test_a_rub_in_a_sweep_has_its_most_probable_failure_point_as_a_sweep_file(sweep_study, tmp_path):
+    """[reliability] on a sweep: FORM's design point of the clearance to the post, written as
+    design_point/clearance_post/sweep.toml, swept again by `hoseline sweep`'s code, has the limit's least clearance
+    (the design point lies on the failure surface)."""
+    (tmp_path / "post.stl").write_bytes((sweep_study / "post.stl").read_bytes())
+    (tmp_path / "sweep.toml").write_text(SWEEP_FILE, encoding="utf-8")
+    text = (SWEEP_STUDY.replace("samples = 6", "samples = 2") + '[limits]\n"clearance:post" = -1.6\n'
+            '[reliability]\nlimits = ["clearance:post"]\nimportance_samples = 4\n')
+    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"), "--workers", "0", "-q")
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text(encoding="utf-8"))
+    rub = summary["rare_failures"][0]
+    assert rub["converged"] and rub["quantity"] == "clearance:post"
+    again = run_sweep(load_sweep(tmp_path / "out" / "design_point" / "clearance_post" / "sweep.toml"))
+    assert again.clearances[0].distance.min() == pytest.approx(-1.6, abs=1e-6)
+
+
 @pytest.mark.parametrize("old, new, message", [
     ('parameter = "hose.bending_stiffness"', 'parameter = "hose.bending_stiff"', 'vary[2].parameter'),
     ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "sphere"\nradius = 1.0', "does not apply"),
@@ -211,6 +229,14 @@ def test_a_sweep_study_judges_every_pose(sweep_study):
     ('distribution = "loguniform"', 'distribution = "loguniform"\nframe = "fitting"',
      'vary[2] (hose.bending_stiffness): frame = "fitting" applies to points'),
     ("bend_radius = 36.0", "bendradius = 36.0", "limits.bendradius: unknown quantity"),
+    ("end_torque = 2500.0", 'end_torque = 2500.0\n[reliability]\nlimits = ["deviation"]',
+     'reliability.limits[0] = "deviation": not a limit FORM can judge; choose one of bend_radius, end_torque'),
+    ("end_torque = 2500.0", 'end_torque = 2500.0\n[reliability]\nmethod = "mc"', "reliability.method"),
+    ("end_torque = 2500.0", "end_torque = 2500.0\n[reliability]\nimportance_samples = -1", "reliability.importance_samples"),
+    ("end_torque = 2500.0", "end_torque = 2500.0\n[sobol]\nsamples = 4", "sobol.samples"),
+    ("end_torque = 2500.0", "end_torque = 2500.0\n[sobol]\nrows = 4", "sobol.rows"),
+    ('base = "problem.toml"', 'base = "problem.toml"\nworst_case = true\nsensitivities = false',
+     "worst_case = true needs [[vary]] tolerances and sensitivities = true"),
 ])
 def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):
     """Exit code 2, one line naming the field and the fix, nothing written."""
@@ -251,6 +277,26 @@ def test_a_point_tolerance_in_the_fittings_frame_takes_the_base_fittings_axes(tm
     study, _, _ = load_study(tmp_path / "study.toml")
     point = study.variation.tolerances[0]
     assert point.axes == fitting_axes(study.base.problem.end.direction) and point.size == (0.5, 0.5, 1.0)
+
+
+def test_the_most_probable_failure_point_is_a_problem_file_on_the_limit(tmp_path):
+    """[reliability]: FORM's design point of the end torque, written as design_point/end_torque/problem.toml, solved
+    again by `hoseline solve`'s sequence, gives the limit's torque (the design point lies on the failure surface)."""
+    text = PLACEMENT_STUDY.replace("samples = 16", "samples = 4") + "[reliability]\nimportance_samples = 8\n"
+    (tmp_path / "problem.toml").write_text(problem_to_toml(demo_problem(180.0, 30)), encoding="utf-8")
+    (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+    result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"), "--workers", "0")
+    assert result.exit_code == 0, result.output
+    assert "rare failures" in result.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text(encoding="utf-8"))
+    torque = next(r for r in summary["rare_failures"] if r["quantity"] == "end_torque")
+    assert torque["converged"] and torque["importance_sampling"]["samples"] == 8
+    either = summary["rare_failures_any"]  # bend radius or end torque: at least the likelier of the two
+    assert either["importance_sampling"]["samples"] == 16
+    assert either["form_probability"] >= 0.99 * max(r["form_probability"] for r in summary["rare_failures"])
+    placed = solve(load_problem(tmp_path / "out" / "design_point" / "end_torque" / "problem.toml"), estimate_error=False)
+    assert abs(float(placed.end_moment @ placed.problem.end.direction)) == pytest.approx(2500.0, rel=1e-6)
+    assert "Rare failures" in (tmp_path / "out" / "report.html").read_text(encoding="utf-8")
 
 
 def test_a_missing_base_file_is_named(tmp_path):

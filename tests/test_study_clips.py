@@ -105,6 +105,8 @@ def test_a_study_varies_the_clip_and_every_sample_runs_through_its_moved_clip(tm
     ("fixed", STUDY.replace("clips[0].point", "clips[2].point"), "the base has 1 clip(s), numbered from 0"),
     ("ball", STUDY, "clip 0 is a ball clip: it holds the position only"),
     ("sliding", STUDY.replace("seed = 2", 'seed = 2\nstart = "nominal"'), 'start = "nominal" with a sliding clip'),
+    ("sliding", STUDY + "\n[reliability]\n",
+     "[reliability]: the base has a sliding clip, whose sensitivities FORM needs are not covered"),
 ])
 def test_bad_clip_tolerances_are_refused_naming_the_fix(tmp_path, kind, text, message):
     (tmp_path / "problem.toml").write_text(problem_to_toml(clipped(kind)), encoding="utf-8")

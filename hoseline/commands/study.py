@@ -18,7 +18,8 @@ from hoseline.commands.common import BAD_INPUT, OUT_HELP, QUIET_HELP, errors_to_
 
 def study_command(
     study_file: Path = typer.Argument(..., help="TOML study file: a base problem or sweep file, \\[\\[vary]] "
-                                                "tolerances, \\[sampling], \\[limits], \\[design] (see docs/variation.md)"),
+                                                "tolerances, \\[sampling], \\[limits], \\[design], \\[reliability] "
+                                                "(FORM/SORM), \\[sobol], worst_case (see docs/variation.md)"),
     out: Path = typer.Option(..., "-o", "--out", help=OUT_HELP),
     scheduler: str = typer.Option(None, "--scheduler", help="an existing Dask cluster: tcp://HOST:PORT or a scheduler "
                                                             "file (default: a LocalCluster on this machine)"),
@@ -26,7 +27,8 @@ def study_command(
                                                                "per core; 0: in this process, without Dask)"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help=QUIET_HELP),
 ) -> None:
-    """Sample the tolerances of a hose (and search lengths and clockings); write report.html, envelope.stl and tables."""
+    """Sample the tolerances of a hose (and search lengths and clockings; rare failures by FORM, Sobol' indices,
+    worst-case corners); write report.html, envelope.stl and tables."""
     from hoseline.procedures.variation.scheduler import ClusterError, scheduler_address
 
     if scheduler is not None and workers is not None:
@@ -58,6 +60,10 @@ def study_command(
     if not quiet:
         if outcome.probabilities:
             Console().print(_limits_table(outcome))
+        if outcome.rare_events:
+            Console().print(_rare_table(outcome))
+        if outcome.worst_cases:
+            Console().print(_worst_case_table(outcome))
         for note in outcome.notes:
             Console().print(f"[yellow]note:[/] {note}", soft_wrap=True)
         if outcome.design is not None:
@@ -77,4 +83,35 @@ def _limits_table(outcome) -> Table:
         style = "green" if p.broken == 0 else "bold red"
         table.add_row(p.limit.describe(), f"[{style}]{p.estimate:.4g}[/]", f"[{p.low:.3g}, {p.high:.3g}]",
                       f"{p.broken} / {p.solved}", str(p.failed))
+    return table
+
+
+def _rare_table(outcome) -> Table:
+    """FORM, SORM and importance sampling of each limit as a Rich table."""
+    table = Table(title="rare failures (FORM; design points in design_point/)")
+    for column in ("limit", "beta", "FORM P", "SORM P", "importance sampling P", "95 % interval", "solves"):
+        table.add_column(column)
+    for event in outcome.rare_events:
+        check = event.importance
+        table.add_row(event.limit.describe(), f"{event.point.beta:.4g}", f"{event.form:.3g}",
+                      "" if event.sorm is None else f"{event.sorm:.3g}",
+                      "" if check is None else f"{check.estimate:.3g}",
+                      "" if check is None else f"[{check.low:.3g}, {check.high:.3g}]", str(event.evaluations))
+    union = outcome.rare_union
+    if union is not None:
+        check = union.importance
+        table.add_row(f"any of these {len(union.limits)}", "", f"{union.form:.3g}", "",
+                      "" if check is None else f"{check.estimate:.3g}",
+                      "" if check is None else f"[{check.low:.3g}, {check.high:.3g}]", "")
+    return table
+
+
+def _worst_case_table(outcome) -> Table:
+    """Each quantity's worst-case corner: the linear stack and the hose solved there, as a Rich table."""
+    table = Table(title="worst case (corners in worst_case/)")
+    for column in ("quantity", "nominal", "worst, first order", "worst, solved"):
+        table.add_column(column)
+    for case in outcome.worst_cases:
+        table.add_row(f"{case.quantity.name} [{case.quantity.unit}]", f"{case.nominal:.4g}", f"{case.first_order:.4g}",
+                      f"{case.solved:.4g}" if not case.reason else "not solved")
     return table

@@ -3,6 +3,8 @@
     name = "brake hose as built"       # optional, default the file name
     base = "problem.toml"              # a problem file, or a sweep file ([[bodies]]), relative to this file
     sensitivities = true               # optional: derivatives and first-order variance
+    worst_case = false                 # optional: each quantity at its worst corner of the tolerances (needs the
+                                       #   sensitivities; unbounded distributions at +-3 standard deviations)
 
     [sampling]
     method = "sobol"                   # "monte-carlo", "latin-hypercube" or "sobol"
@@ -61,6 +63,16 @@
     rank_by = "clearance:strut"        # optional: the limited quantity whose margin ranks the candidates
     method = "grid"                    # or "optimise": per length, the best clocking between grid points
 
+    [reliability]                      # optional: rare failures (FORM, SORM, importance sampling)
+    method = "form"                    # or "sorm": FORM with Breitung's curvature correction
+    importance_samples = 100           # samples around each design point checking it (0: none)
+    limits = ["end_torque"]            # optional: which limits (default: every limit but the deviation)
+    seed = 0                           # of the importance samples
+
+    [sobol]                            # optional: Sobol' first-order and total indices per tolerance
+    samples = 256                      # N base rows of the Saltelli design: N (tolerances + 2) hoses
+    seed = 0
+
 Errors name the field, the value and the fix, as for problem files.
 """
 
@@ -76,8 +88,9 @@ from pydantic import AfterValidator, ConfigDict, Field, model_validator
 from hoseline.io.problem_file import ProblemFileError, _Section, _validated, load_problem, read_toml
 from hoseline.procedures.variation.design_search import DesignGrid, default_rank_by
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
+from hoseline.procedures.variation.rare import Reliability
 from hoseline.procedures.variation.samples import StudyBase
-from hoseline.procedures.variation.study import Sampling, Study
+from hoseline.procedures.variation.study import GlobalSensitivity, Sampling, Study
 from hoseline.procedures.variation.tolerances import (DISTRIBUTIONS, PARAMETERS, Tolerance, Variation, clip_index,
                                                       fitting_axes, parameter_kind)
 
@@ -147,6 +160,22 @@ class DesignSection(_Section):
     method: Literal["grid", "optimise"] = "grid"
 
 
+class ReliabilitySection(_Section):
+    """[reliability]: FORM or SORM of the limits, checked by importance sampling."""
+
+    method: Literal["form", "sorm"] = "form"
+    importance_samples: Annotated[int, Field(ge=0, le=MAX_SAMPLES)] = 100
+    limits: list[str] = Field(default_factory=list)
+    seed: Annotated[int, Field(ge=0)] = 0
+
+
+class SobolSection(_Section):
+    """[sobol]: the Saltelli design of the Sobol' indices."""
+
+    samples: Annotated[int, Field(ge=8, le=MAX_SAMPLES)] = 256
+    seed: Annotated[int, Field(ge=0)] = 0
+
+
 class StudyFile(_Section):
     """The whole study file."""
 
@@ -155,10 +184,13 @@ class StudyFile(_Section):
     name: str = "study"
     base: str
     sensitivities: bool = True
+    worst_case: bool = False
     sampling: SamplingSection = Field(default_factory=SamplingSection)
     vary: list[VarySection] = Field(default_factory=list)
     limits: dict[str, float] = Field(default_factory=dict)
     design: DesignSection | None = None
+    reliability: ReliabilitySection | None = None
+    sobol: SobolSection | None = None
 
     @model_validator(mode="after")
     def _something_to_do(self) -> "StudyFile":
@@ -190,7 +222,15 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
     if spec.vary and sampling.count == 0:
         raise StudyFileError(f"{path}: sampling.samples = 0 with [[vary]] tolerances: give at least 1 sample")
     design = _design(spec.design, base, limits, sampling, str(path)) if spec.design else None
-    study = Study(spec.name, base, variation, sampling, limits, spec.sensitivities, design)
+    reliability = _reliability(spec.reliability, base, variation, limits, str(path)) if spec.reliability else None
+    if spec.sobol is not None and not spec.vary:
+        raise StudyFileError(f"{path}: [sobol] needs [[vary]] tolerances: give some, or remove [sobol]")
+    sobol = GlobalSensitivity(spec.sobol.samples, spec.sobol.seed) if spec.sobol is not None else None
+    if spec.worst_case and not (spec.vary and spec.sensitivities):
+        raise StudyFileError(f"{path}: worst_case = true needs [[vary]] tolerances and sensitivities = true (the corner "
+                             "of each quantity follows its derivatives): give them, or remove worst_case")
+    study = Study(spec.name, base, variation, sampling, limits, spec.sensitivities, design, reliability, sobol,
+                  spec.worst_case)
     return study, text, base_path
 
 
@@ -345,6 +385,30 @@ def _design(section: DesignSection, base: StudyBase, limits: tuple[Limit, ...], 
         raise StudyFileError(f"{source}: design.rank_by = \"{rank_by}\": not a limited quantity; choose one of "
                              f"{', '.join(names)}")
     return DesignGrid(lengths, clockings, rank_by, section.samples, section.method)
+
+
+def _reliability(section: ReliabilitySection, base: StudyBase, variation: Variation, limits: tuple[Limit, ...],
+                 source: str) -> Reliability:
+    """The Reliability of [reliability]: FORM needs tolerances, limits with derivatives, and a base whose
+    sensitivities are covered."""
+    if not variation.tolerances:
+        raise StudyFileError(f"{source}: [reliability] needs [[vary]] tolerances: give some, or remove [reliability]")
+    problem = base.problem
+    uncovered = ("stiffener springs" if problem.hose.stiffeners is not None else
+                 "a sliding clip" if any(clip.kind == "sliding" for clip in problem.clips) else
+                 "clips in a sweep" if base.sweep is not None and problem.clips else None)
+    if uncovered:
+        raise StudyFileError(f"{source}: [reliability]: the base has {uncovered}, whose sensitivities FORM needs are "
+                             "not covered (docs/variation.md); remove [reliability] and judge the limits by sampling")
+    smooth = [limit.quantity.name for limit in limits if limit.quantity.name != "deviation"]
+    if not smooth:
+        raise StudyFileError(f"{source}: [reliability] needs a limit other than the deviation (which has no "
+                             "derivative): give one in [limits]")
+    for k, name in enumerate(section.limits):
+        if name not in smooth:
+            raise StudyFileError(f"{source}: reliability.limits[{k}] = \"{name}\": not a limit FORM can judge; choose "
+                                 f"one of {', '.join(smooth)} (given in [limits]; the deviation has no derivative)")
+    return Reliability(section.method, section.importance_samples, tuple(section.limits), section.seed)
 
 
 def _steps(pair: list[float], step: float) -> tuple[float, ...]:

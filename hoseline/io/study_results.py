@@ -30,6 +30,7 @@ from hoseline.io.results import _json, _plain
 from hoseline.io.csv_numbers import cell
 from hoseline.procedures.variation.statistics import PERCENTILES
 from hoseline.procedures.variation.study import Study, StudyOutcome
+from hoseline.procedures.variation.tolerances import perturbed
 
 PARTIAL = ".partial"
 SWEEP_TABLES = ("bodies", "obstacles", "sweep")
@@ -236,6 +237,33 @@ def study_document(outcome: StudyOutcome) -> dict:
             name: dict(zip([t.name for t in study.variation.tolerances], first.contributions[k]))
             for k, name in enumerate(first.names)
         }
+    if outcome.worst_cases:
+        variation = study.variation
+        document["worst_case"] = {
+            case.quantity.name: {
+                "unit": case.quantity.unit, "worse": "down" if case.quantity.sense == "at least" else "up",
+                "nominal": case.nominal, "first_order_worst": case.first_order, "solved_worst": case.solved,
+                "reason": case.reason or None,
+                "corner": {variation.names[k]: case.corner[k] for k in variation.varied}}
+            for case in outcome.worst_cases}
+    if outcome.sobol is not None:
+        sobol = outcome.sobol
+        labels = [t.name for t in study.variation.tolerances]
+        document["sobol"] = {
+            "base_rows": sobol.count, "rows_used": sobol.rows,
+            "indices": {name: {label: {"first": sobol.first[q, k], "first_ci95": [sobol.first_low[q, k], sobol.first_high[q, k]],
+                                       "total": sobol.total[q, k], "total_ci95": [sobol.total_low[q, k], sobol.total_high[q, k]]}
+                               for k, label in enumerate(labels)}
+                        for q, name in enumerate(names)}}
+    if outcome.rare_events:
+        document["rare_failures"] = [_rare_document(event, study) for event in outcome.rare_events]
+    if outcome.rare_union is not None:
+        union, check = outcome.rare_union, outcome.rare_union.importance
+        document["rare_failures_any"] = {
+            "limits": [limit.describe() for limit in union.limits], "form_probability": union.form,
+            "importance_sampling": None if check is None else {
+                "probability": check.estimate, "standard_error": check.standard_error, "ci95": [check.low, check.high],
+                "samples": check.samples, "failed": check.failed, "ci95_high_counting_failed": check.high_with_failed}}
     if outcome.design is not None:
         design = outcome.design
         document["design"] = {"lengths_mm": list(design.grid.lengths), "clockings_deg": list(design.grid.clockings),
@@ -247,6 +275,24 @@ def study_document(outcome: StudyOutcome) -> dict:
                 {"length_mm": r.length, "clocking_deg": r.clocking, "bracket_deg": list(r.bracket),
                  "evaluations": r.evaluations, "improved_on_grid": r.optimised} for r in design.refined]
     return _plain(document)
+
+
+def _rare_document(event, study: Study) -> dict:
+    """summary.json's entry of one rare failure (rare.RareEvent)."""
+    point, check = event.point, event.importance
+    names = study.variation.names
+    return {
+        "limit": event.limit.describe(), "quantity": event.limit.quantity.name,
+        "beta": point.beta, "form_probability": event.form, "sorm_probability": event.sorm,
+        "curvatures": None if event.curvatures is None else list(event.curvatures.curvatures),
+        "converged": point.converged, "message": point.message, "solves_with_sensitivities": event.evaluations,
+        "design_point_standard_normal": list(point.design_point),
+        "design_point_deviations": {names[k]: event.deviation[k] for k in study.variation.varied},
+        "importance_sampling": None if check is None else {
+            "probability": check.estimate, "standard_error": check.standard_error, "ci95": [check.low, check.high],
+            "coefficient_of_variation": check.coefficient_of_variation, "samples": check.samples,
+            "failed": check.failed, "ci95_high_counting_failed": check.high_with_failed},
+    }
 
 
 def write_study_data(outcome: StudyOutcome, folder: Path, base_path: Path) -> None:
@@ -263,6 +309,8 @@ def write_study_data(outcome: StudyOutcome, folder: Path, base_path: Path) -> No
         if outcome.study.base.sweep is not None and outcome.study.base.obstacle_names and outcome.envelopes:
             write_text(folder / "clearance_by_pose.csv", clearance_csv(outcome))
         _write_worst(outcome, folder, base_path)
+    _write_design_points(outcome, folder, base_path)
+    _write_corners(outcome, folder, base_path)
     if outcome.first_order is not None:
         write_text(folder / "sensitivities.csv", sensitivities_csv(outcome))
     if outcome.design is not None:
@@ -280,6 +328,37 @@ def _write_worst(outcome: StudyOutcome, folder: Path, base_path: Path) -> None:
         target = folder / "worst" / limit.quantity.name.replace(":", "_")
         target.mkdir(parents=True, exist_ok=True)
         header = f"# sample {index} of study '{study.name}': the worst {limit.quantity.name}\n"
+        write_text(target / "problem.toml", header + problem_to_toml(problem))
+        if study.base.sweep is not None:
+            write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))
+
+
+def _write_design_points(outcome: StudyOutcome, folder: Path, base_path: Path) -> None:
+    """design_point/QUANTITY/problem.toml (and sweep.toml for a sweep): the most probable failure point of every
+    limit FORM judged (the hose with the deviations that break it first)."""
+    study = outcome.study
+    for event in outcome.rare_events:
+        if not event.point.converged:
+            continue
+        problem = perturbed(study.base.problem, event.deviation)
+        target = folder / "design_point" / event.limit.quantity.name.replace(":", "_")
+        target.mkdir(parents=True, exist_ok=True)
+        header = (f"# the most probable failure point of {event.limit.describe()} in study '{study.name}': "
+                  f"beta {event.point.beta:.4g}, FORM P {event.form:.3g}\n")
+        write_text(target / "problem.toml", header + problem_to_toml(problem))
+        if study.base.sweep is not None:
+            write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))
+
+
+def _write_corners(outcome: StudyOutcome, folder: Path, base_path: Path) -> None:
+    """worst_case/QUANTITY/problem.toml (and sweep.toml for a sweep): the hose at each quantity's worst-case corner."""
+    study = outcome.study
+    for case in outcome.worst_cases:
+        problem = perturbed(study.base.problem, case.corner)
+        target = folder / "worst_case" / case.quantity.name.replace(":", "_")
+        target.mkdir(parents=True, exist_ok=True)
+        header = (f"# the worst-case corner of {case.quantity.name} in study '{study.name}': first order "
+                  f"{case.first_order:.6g}, solved {case.solved:.6g} {case.quantity.unit}\n")
         write_text(target / "problem.toml", header + problem_to_toml(problem))
         if study.base.sweep is not None:
             write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))

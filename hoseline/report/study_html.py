@@ -1,7 +1,8 @@
 """The study report: one self-contained HTML page (plotly.js embedded, no network needed to open it).
 
-Sections: verdict (probability of breaking each limit with its 95 % interval), notes, 3D envelope,
-distributions, first order beside Monte Carlo with the tornado chart and the station spreads,
+Sections: verdict (probability of breaking each limit with its 95 % interval), notes, rare failures (FORM), 3D envelope,
+distributions, first order beside Monte Carlo with the tornado chart and the station spreads, Sobol' indices,
+worst-case corners,
 clearance per pose (sweeps), the design search (ranked table, heat map), failures, the run, the input.
 """
 
@@ -23,6 +24,7 @@ from hoseline.report.study_figures import (
     tornado_figure,
     view_figure,
 )
+from hoseline.report.study_methods import rare_failure_section, sobol_section, worst_case_section
 from hoseline.report.sweep_html import STYLE, _format, _performance_table
 
 SAMPLES_LISTED = 20  # sample indexes shown per failure cause (summary.json lists them all)
@@ -44,7 +46,7 @@ def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_te
     if outcome.notes:
         parts += ["<h2>Notes</h2>", "<ul>" + "".join(f"<li>{html.escape(n)}</li>" for n in outcome.notes) + "</ul>"]
     if outcome.samples:
-        parts += ["<h2>Limits</h2>", _probability_table(outcome), "<h2>Envelope</h2>",
+        parts += ["<h2>Limits</h2>", _probability_table(outcome), *rare_failure_section(outcome), "<h2>Envelope</h2>",
                   "<p>Blue surface: the union of the tubes of all sampled hoses (also envelope.stl"
                   + (f", meshed on a grid of {envelope.cell:.2g} mm" if envelope is not None else "")
                   + "). Grey: some samples. Dark blue: the nominal hose. Red dashed: the worst sample of each limit "
@@ -62,6 +64,8 @@ def study_report_html(outcome: StudyOutcome, envelope: Envelope | None, input_te
                       "over the extreme, or tolerances too large).</p>",
                       _first_order_table(outcome),
                       "<h3>Which tolerance matters most (first order)</h3>", _figure(tornado_figure(outcome))]
+        parts += sobol_section(outcome)
+        parts += worst_case_section(outcome)
         parts += ["<h3>Spread along the hose</h3>", _figure(spread_figure(outcome))]
         if study.base.sweep is not None and study.base.obstacle_names:
             parts += ["<h2>Clearance per pose</h2>", _figure(clearance_figure(outcome))]

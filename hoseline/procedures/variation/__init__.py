@@ -12,8 +12,11 @@ differentiates the quantities with respect to every parameter at the nominal equ
 (implicit function theorem with the exact Hessian) for the first-order variance, and
 sweep_sensitivity.py the same at every pose of a sweep for its extremes over the poses;
 design_search.py judges and ranks hose lengths and clockings (the clocking refined with every
-limit a constraint); study.py holds a study and reads
-its outcome off the samples; run.py runs a study from start to end.
+limit a constraint); reliability.py holds FORM, SORM (Breitung) and importance sampling in standard
+normal space, and rare.py the hose's limit states for them (margins with exact gradients, the most
+probable failure point of each limit); global_sensitivity.py draws the Saltelli design and estimates
+Sobol' indices with bootstrap intervals; worst_case.py finds each quantity's worst-case corner;
+study.py holds a study and reads its outcome off the samples; run.py runs a study from start to end.
 
 May import: model/, mechanics/, placement/, geometry/, sweep/.  Not: scans/, io/, report/.
 """

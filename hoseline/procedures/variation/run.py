@@ -1,4 +1,5 @@
-"""A study from start to end: the nominal hose, the sensitivities, the samples, the design search, the outcome.
+"""A study from start to end: the nominal hose, the sensitivities, the samples, the worst-case corners, the Sobol'
+indices, the rare failures (FORM and importance sampling), the design search, the outcome.
 
 Batches go through a store (anything with finished() and save(k, arrays); io/study_results.py
 keeps them as files so an interrupted study resumes): finished batches are not run again.
@@ -16,11 +17,18 @@ import numpy as np
 from hoseline.procedures.placement.continuation import PlacementError, Progress
 from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
+from hoseline.procedures.variation.global_sensitivity import sobol_indices
+from hoseline.procedures.variation.rare import RareEvent, RareTask, RareUnion, rare_event, standard_normal_deviations
+from hoseline.procedures.variation.reliability import importance_estimate, importance_points, union_first_order
 from hoseline.procedures.variation.scheduler import scheduler_address
 from hoseline.procedures.variation.samples import StudyContext, nominal_context
 from hoseline.procedures.variation.sensitivity import placement_sensitivities
 from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
 from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities
+from hoseline.procedures.variation.worst_case import WorstCase, worst_cases
+
+
+UNION_DRAWS = 100_000  # draws of the first-order union of the limits' half-spaces (no solve; 1 % at 1e-3)
 
 
 class BatchStore(Protocol):
@@ -48,7 +56,8 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
               progress: Progress | None = None) -> StudyOutcome:
     """Run `study` and return its outcome.
 
-    stores: stage name ("samples", "design", "optimise") -> its BatchStore (default: in memory).  where: where the
+    stores: stage name ("samples", "design", "optimise", "corners", "sobol", "form", "importance_K") -> its BatchStore
+    (default: in memory).  where: where the
     batches run.  progress: callable(phase, fraction).  Raises PlacementError when the nominal hose
     cannot be solved, ClusterError at once (before any solving) when an existing cluster cannot be reached.
     """
@@ -87,6 +96,24 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
             cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose
             design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
             timings["design"] = time.perf_counter() - tick
+        corners = None
+        if study.worst_case and sensitivities is not None:
+            tick = time.perf_counter()
+            corners = _worst_cases(engine, replace(context, warm=None), study, sensitivities, stores, progress)
+            timings["corners"] = time.perf_counter() - tick
+        sobol = None
+        if study.global_sensitivity is not None:
+            tick = time.perf_counter()
+            rows = _stage(engine, "sobol", context, study.sobol_coordinates(), study.sampling.batch_size(), stores,
+                          progress)
+            sobol = sobol_indices(rows["values"], study.global_sensitivity.samples, len(study.variation.tolerances),
+                                  study.global_sensitivity.seed)
+            timings["sobol"] = time.perf_counter() - tick
+        rare_events, rare_union = None, None
+        if study.reliability is not None:
+            tick = time.perf_counter()
+            rare_events, rare_union = _rare_events(engine, replace(context, warm=None), study, stores, progress)
+            timings["rare"] = time.perf_counter() - tick
         design = None
         if design_samples is not None:
             names = [q.name for q in study.quantities]
@@ -103,6 +130,15 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     outcome = summarize(study, samples, nominal.values(nominal.centerlines), nominal.centerlines, sensitivities)
     outcome.notes[:0] = notes
     outcome.design = design
+    outcome.rare_events = rare_events or []
+    outcome.rare_union = rare_union
+    outcome.sobol = sobol
+    outcome.worst_cases = corners or []
+    if study.worst_case and sensitivities is None:
+        outcome.notes.append("no worst-case corners: they follow the sensitivities, which this study has not")
+    if sobol is not None and outcome.first_order is not None:
+        outcome.notes.extend(_sobol_notes(outcome))
+    outcome.notes.extend(note for event in outcome.rare_events for note in event.notes())
     outcome.run = {
         "where": where.describe(),
         "samples": len(coordinates),
@@ -110,7 +146,10 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         "seconds, nominal hose and sensitivities": timings["nominal"],
         "seconds, waiting for the cluster (after the nominal hose)": timings["cluster"],
         "seconds, samples": timings["samples"],
+        "seconds, worst-case corners": timings.get("corners"),
+        "seconds, Sobol' indices": timings.get("sobol"),
         "seconds, design search": timings.get("design"),
+        "seconds, rare failures (FORM and importance sampling)": timings.get("rare"),
         "seconds, design optimiser": timings.get("optimiser"),
         "seconds, closing the cluster": timings["close"],
         "seconds, whole study": time.perf_counter() - started,
@@ -135,6 +174,75 @@ def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.nda
 
     engine.run(context, coordinates, batch_size, keep, done=set(batches))
     return merge_batches(batches)
+
+
+def _worst_cases(engine: Engine, context: StudyContext, study: Study, sensitivities, stores: Callable[[str], BatchStore],
+                 progress: Progress | None) -> list[WorstCase]:
+    """The worst-case corner of every smooth quantity from the sensitivities, each hose solved there (a stage)."""
+    by_name = {q.name: q for q in study.quantities}
+    cases = worst_cases(study.variation, tuple(by_name[name] for name in sensitivities.names), sensitivities.values,
+                        sensitivities.derivatives)
+    solved = _stage(engine, "corners", context, np.array([case.corner for case in cases]), 1, stores, progress)
+    names = [q.name for q in study.quantities]
+    for row, case in enumerate(cases):
+        case.solved = float(solved["values"][row, names.index(case.quantity.name)])
+        case.reason = str(solved["reason"][row])
+    return cases
+
+
+def _sobol_notes(outcome: StudyOutcome) -> list[str]:
+    """Where the first order is flagged wrong, the Sobol' indices to use instead."""
+    first = outcome.first_order
+    return [f"the first-order contributions (tornado) of {name} are wrong here: its Sobol' indices are in the report "
+            "and summary.json (their first-order and total shares need no linearity)"
+            for name, check in zip(first.names, first.agreements) if not check.agrees]
+
+
+def _rare_events(engine: Engine, context: StudyContext, study: Study, stores: Callable[[str], BatchStore],
+                 progress: Progress | None) -> tuple[list[RareEvent], RareUnion | None]:
+    """FORM (and SORM) of every limit the study's [reliability] names (one task each, kept in the "form" store),
+    then the importance samples around each design point (a stage of samples each); and, of two limits or more
+    with a design point, the probability of breaking any of them."""
+    options = study.reliability
+    limits = study.reliability_limits()
+    sorm = options.method == "sorm"
+    tasks = [RareTask(limit, study.variation, sorm) for limit in limits]
+    store = stores("form")
+    results = store.finished()
+
+    def keep(k: int, arrays: dict[str, np.ndarray]) -> None:
+        store.save(k, arrays)
+        results[k] = arrays
+        if progress is not None:
+            progress("rare failures (FORM)", len(results) / len(tasks))
+
+    engine.map(rare_event, context, tasks, keep, done=set(results))
+    events = [RareEvent.from_arrays(limit, study.variation, results[k], sorm) for k, limit in enumerate(limits)]
+    names = [q.name for q in study.quantities]
+    columns = [names.index(limit.quantity.name) for limit in limits]
+    drawn = []  # (event, its points, every limit's margin there)
+    for k, event in enumerate(events):
+        if options.importance_samples == 0 or not np.all(np.isfinite(event.point.design_point)):
+            continue
+        points = importance_points(event.point.design_point, options.importance_samples, options.seed + k)
+        deviations = standard_normal_deviations(study.variation, points)
+        samples = _stage(engine, f"importance_{k}", context, deviations, default_batch_size(len(points)), stores,
+                         progress)
+        margins = np.column_stack([limit.margin(samples["values"][:, q]) for limit, q in zip(limits, columns)])
+        event.importance = importance_estimate(points, event.point.design_point, margins[:, k])
+        if event.point.converged:
+            drawn.append((event, points, margins))
+    found = [event for event in events if event.point.converged]
+    if len(found) < 2:
+        return events, None
+    form = union_first_order([event.point for event in found], UNION_DRAWS, options.seed)
+    pooled = None
+    if len(drawn) == len(found):
+        centers = np.array([event.point.design_point for event, _, _ in drawn])
+        chosen = [limits.index(event.limit) for event in found]
+        pooled = importance_estimate(np.vstack([points for _, points, _ in drawn]), centers,
+                                     np.vstack([margins for _, _, margins in drawn])[:, chosen].min(axis=1))
+    return events, RareUnion(tuple(event.limit for event in found), form, pooled)
 
 
 def _refine(engine: Engine, context: StudyContext, tasks: list[RefineTask], stores: Callable[[str], BatchStore],

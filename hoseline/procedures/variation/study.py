@@ -18,6 +18,8 @@ from hoseline.procedures.variation.designs import balanced, unit_design
 from hoseline.procedures.variation.design_search import DesignGrid, DesignOutcome
 from hoseline.procedures.variation.engine import default_batch_size
 from hoseline.procedures.variation.quantities import Limit, Quantity, natural_scale, quantities
+from hoseline.procedures.variation.global_sensitivity import SobolIndices, saltelli_design
+from hoseline.procedures.variation.rare import RareEvent, RareUnion, Reliability
 from hoseline.procedures.variation.samples import StudyBase, failure_cause
 from hoseline.procedures.variation.sensitivity import Sensitivities
 from hoseline.procedures.variation.statistics import (
@@ -32,6 +34,7 @@ from hoseline.procedures.variation.statistics import (
     worst_sample,
 )
 from hoseline.procedures.variation.tolerances import Variation, perturbed
+from hoseline.procedures.variation.worst_case import WorstCase
 
 
 STARTS = ("straight", "nominal")
@@ -56,9 +59,18 @@ class Sampling:
 
 
 @dataclass(frozen=True)
+class GlobalSensitivity:
+    """What [sobol] asks: samples, the N base rows of the Saltelli design (N (tolerances + 2) hoses), and its seed."""
+
+    samples: int = 256
+    seed: int = 0
+
+
+@dataclass(frozen=True)
 class Study:
     """A study: name, the base (placement or sweep), the tolerances, the sampling, the limits,
-    whether to compute the sensitivities, and an optional design search."""
+    whether to compute the sensitivities, and an optional design search; reliability: FORM of the limits;
+    global_sensitivity: Sobol' indices; worst_case: the worst-case corners (they need the sensitivities)."""
 
     name: str
     base: StudyBase
@@ -67,11 +79,23 @@ class Study:
     limits: tuple[Limit, ...]
     sensitivities: bool = True
     design: DesignGrid | None = None
+    reliability: Reliability | None = None
+    global_sensitivity: GlobalSensitivity | None = None
+    worst_case: bool = False
 
     @property
     def quantities(self) -> tuple[Quantity, ...]:
         """The judged quantities, in the order the samples store them."""
         return quantities(self.base.obstacle_names)
+
+    def reliability_limits(self) -> tuple[Limit, ...]:
+        """The limits whose rare failure [reliability] asks for (none without it): those it names, else every limit
+        but the deviation's (no derivative)."""
+        if self.reliability is None:
+            return ()
+        names = self.reliability.limits
+        return tuple(limit for limit in self.limits if (limit.quantity.name in names if names
+                                                        else limit.quantity.name != "deviation"))
 
     def coordinates(self) -> np.ndarray:
         """(count, width) the deviations of every sample (empty without tolerances)."""
@@ -79,6 +103,12 @@ class Study:
             return np.zeros((0, self.variation.width))
         unit = unit_design(self.sampling.method, self.sampling.count, self.variation.dimensions, self.sampling.seed)
         return self.variation.coordinates(unit)
+
+    def sobol_coordinates(self) -> np.ndarray:
+        """(N (tolerances + 2), width) the deviations of the Saltelli design of [sobol] (global_sensitivity.py)."""
+        settings = self.global_sensitivity
+        groups = tuple(t.dimensions for t in self.variation.tolerances)
+        return self.variation.coordinates(saltelli_design(groups, settings.samples, settings.seed))
 
     def sample_problem(self, index: int) -> Problem:
         """The problem of sample `index` (to reproduce it)."""
@@ -137,6 +167,10 @@ class StudyOutcome:
     deviation: per station P5/P50/P95 (3, N+1) and the maximum (N+1,) of the distance from nominal, mm.
     clearance: per obstacle and pose, P5/P50/P95 (O, 3, M) and minimum (O, M), mm.
     failures: the failed samples grouped by cause (FailureCause, most frequent first).  first_order: None without sensitivities.  design: None without search.
+    rare_events: per limit of [reliability], FORM/SORM and the importance-sampling check (rare.RareEvent);
+    rare_union: the probability of breaking any of them (two or more with a design point; else None).
+    sobol: Sobol' indices of every quantity (quantities order) per tolerance, None without [sobol].
+    worst_cases: per smooth quantity its worst-case corner, first-order and solved (worst_case.WorstCase).
     notes: what a reader must know (unbalanced design, disagreement, failures).  run: figures of the run.
     """
 
@@ -154,6 +188,10 @@ class StudyOutcome:
     failures: list[FailureCause]
     first_order: FirstOrder | None = None
     design: DesignOutcome | None = None
+    rare_events: list[RareEvent] = field(default_factory=list)
+    rare_union: RareUnion | None = None
+    sobol: SobolIndices | None = None
+    worst_cases: list[WorstCase] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     run: dict = field(default_factory=dict)
 
