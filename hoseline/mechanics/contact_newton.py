@@ -288,8 +288,9 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
                          (base.band, state.frames, h, node_grad, node_hess, index))
 
 
-def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int]:
-    """(step, multiplier step, unstable directions on the constraint tangent space) of the KKT system.
+def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int, float]:
+    """(step, multiplier step, unstable directions on the constraint tangent space, log |det| of the KKT matrix) of
+    the KKT system.
 
     The banded factor with the low-rank border (contact_solve.banded_step); the dense matrix and
     LAPACK's sytrf where that is not to be trusted (counted in contact_solve.kkt_solves).
@@ -307,6 +308,15 @@ def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np
     hess = system.dense()
     hess[np.diag_indices_from(hess)] += shift
     return dense_step(hess, system.jac_t, system.grad, system.constraint)
+
+
+def tangent_log_det(system: ContactSystem, kkt_log_det: float) -> float:
+    """log |det| of the Hessian on the constraint tangent space, from that of the KKT matrix: det KKT =
+    (-1)^m det(Jc Jc^T) det(Z^T H Z) for an orthonormal basis Z of the tangent space (Jc of full rank; NaN if not)."""
+    if system.jac_t.shape[1] == 0:
+        return kkt_log_det
+    sign, log_gram = np.linalg.slogdet(system.jac_t.T @ system.jac_t)
+    return kkt_log_det - log_gram if sign > 0.0 else math.nan
 
 
 @dataclass
@@ -473,14 +483,15 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
     for iteration in range(max_iterations + 1):
         if not np.isfinite(system.residual):
             return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
-        step, force_step, unstable = _kkt_step(system)
+        step, force_step, unstable, log_det = _kkt_step(system)
         if system.residual <= tolerance:
             if unstable > 0 and _lowest_mode(system)[0] >= -NEUTRAL:
                 unstable = 0  # the pivots counted an eigenvalue that is zero to rounding (see NEUTRAL_MODE)
             elif unstable < 0:  # an impossible count (fewer negative pivots than constraints): rounding in a KKT
                 # matrix with the barrier's stiff rows next to a nearly taut span; the eigenvalues decide
                 unstable = 0 if _lowest_mode(system)[0] >= -NEUTRAL else 1
-            return state, NewtonReport(True, iteration, system.residual, unstable)
+            return state, NewtonReport(True, iteration, system.residual, unstable,
+                                       tangent_log_det=tangent_log_det(system, log_det))
         if iteration == max_iterations:
             break
         if not np.all(np.isfinite(step)):  # e.g. a free tip: its constraint rows are empty (see _multipliers)
@@ -719,7 +730,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
     for iteration in range(max_iterations + 1):
         if not np.isfinite(system.residual):
             return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
-        step, force_step, unstable = _kkt_step(system)
+        step, force_step, unstable, log_det = _kkt_step(system)
         if system.residual <= tolerance and unstable != 0 and iteration < max_iterations:
             if _lowest_mode(system)[0] >= -NEUTRAL:  # the KKT pivots counted a rounding-level eigenvalue
                 return state, NewtonReport(True, iteration, system.residual, 0, NEUTRAL_MODE)
@@ -730,7 +741,8 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
             state, system = pushed
             continue
         if system.residual <= tolerance:
-            return state, NewtonReport(True, iteration, system.residual, unstable)
+            return state, NewtonReport(True, iteration, system.residual, unstable,
+                                       tangent_log_det=tangent_log_det(system, log_det))
         if iteration == max_iterations:
             break
         plain_newton = unstable == 0 and sigma == 0.0 and system.residual < 1e-6 and np.all(np.isfinite(step))
@@ -740,7 +752,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
         for _ in range(40):
             if not plain_newton and (sigma > 0.0 or unstable != 0 or not np.all(np.isfinite(step))):
                 sigma = max(sigma, sigma_floor)
-                step, force_step, shifted_unstable = _kkt_step(system, sigma)
+                step, force_step, shifted_unstable, _ = _kkt_step(system, sigma)
                 if shifted_unstable != 0 or not np.all(np.isfinite(step)):
                     sigma *= 10.0
                     continue

@@ -51,6 +51,8 @@ class NewtonReport:
     residual: float
     unstable_directions: int
     message: str = ""
+    tangent_log_det: float = math.nan  # log |det| of the Hessian on the constraint tangent space where a contact solve
+    # converged (its factor gives it free; procedures/contact/continuation.FoldWatch watches it for folds), else NaN
 
 
 @dataclass
