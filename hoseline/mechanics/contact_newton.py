@@ -66,6 +66,7 @@ from hoseline.mechanics.contact_mesh import MeshArrays, swept_edges_clear
 from hoseline.mechanics.contact_solve import (
     banded_step,
     dense_step,
+    log_abs_det,
     kkt_solves,
     low_rank_columns,
     rotation_gradient_and_band,
@@ -289,8 +290,8 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
 
 
 def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int, float]:
-    """(step, multiplier step, unstable directions on the constraint tangent space, log |det| of the KKT matrix) of
-    the KKT system.
+    """(step, multiplier step, unstable directions on the constraint tangent space, the pivots of the solve, whose
+    contact_solve.log_abs_det is that of the KKT matrix) of the KKT system.
 
     The banded factor with the low-rank border (contact_solve.banded_step); the dense matrix and
     LAPACK's sytrf where that is not to be trusted (counted in contact_solve.kkt_solves).
@@ -310,9 +311,13 @@ def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np
     return dense_step(hess, system.jac_t, system.grad, system.constraint)
 
 
-def tangent_log_det(system: ContactSystem, kkt_log_det: float) -> float:
-    """log |det| of the Hessian on the constraint tangent space, from that of the KKT matrix: det KKT =
-    (-1)^m det(Jc Jc^T) det(Z^T H Z) for an orthonormal basis Z of the tangent space (Jc of full rank; NaN if not)."""
+def tangent_log_det(system: ContactSystem, pivots) -> float:
+    """log |det| of the Hessian on the constraint tangent space, from the pivots of the KKT solve (_kkt_step): det KKT =
+    (-1)^m det(Jc Jc^T) det(Z^T H Z) for an orthonormal basis Z of the tangent space (NaN where Jc is rank deficient
+    or the solve failed)."""
+    if pivots is None:
+        return math.nan
+    kkt_log_det = log_abs_det(*pivots)
     if system.jac_t.shape[1] == 0:
         return kkt_log_det
     sign, log_gram = np.linalg.slogdet(system.jac_t.T @ system.jac_t)
@@ -483,7 +488,7 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
     for iteration in range(max_iterations + 1):
         if not np.isfinite(system.residual):
             return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
-        step, force_step, unstable, log_det = _kkt_step(system)
+        step, force_step, unstable, pivots = _kkt_step(system)
         if system.residual <= tolerance:
             if unstable > 0 and _lowest_mode(system)[0] >= -NEUTRAL:
                 unstable = 0  # the pivots counted an eigenvalue that is zero to rounding (see NEUTRAL_MODE)
@@ -491,7 +496,7 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
                 # matrix with the barrier's stiff rows next to a nearly taut span; the eigenvalues decide
                 unstable = 0 if _lowest_mode(system)[0] >= -NEUTRAL else 1
             return state, NewtonReport(True, iteration, system.residual, unstable,
-                                       tangent_log_det=tangent_log_det(system, log_det))
+                                       tangent_log_det=tangent_log_det(system, pivots))
         if iteration == max_iterations:
             break
         if not np.all(np.isfinite(step)):  # e.g. a free tip: its constraint rows are empty (see _multipliers)
@@ -730,7 +735,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
     for iteration in range(max_iterations + 1):
         if not np.isfinite(system.residual):
             return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
-        step, force_step, unstable, log_det = _kkt_step(system)
+        step, force_step, unstable, pivots = _kkt_step(system)
         if system.residual <= tolerance and unstable != 0 and iteration < max_iterations:
             if _lowest_mode(system)[0] >= -NEUTRAL:  # the KKT pivots counted a rounding-level eigenvalue
                 return state, NewtonReport(True, iteration, system.residual, 0, NEUTRAL_MODE)
@@ -742,7 +747,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
             continue
         if system.residual <= tolerance:
             return state, NewtonReport(True, iteration, system.residual, unstable,
-                                       tangent_log_det=tangent_log_det(system, log_det))
+                                       tangent_log_det=tangent_log_det(system, pivots))
         if iteration == max_iterations:
             break
         plain_newton = unstable == 0 and sigma == 0.0 and system.residual < 1e-6 and np.all(np.isfinite(step))
