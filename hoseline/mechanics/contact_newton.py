@@ -320,8 +320,8 @@ def tangent_log_det(system: ContactSystem, pivots) -> float:
     kkt_log_det = log_abs_det(*pivots)
     if system.jac_t.shape[1] == 0:
         return kkt_log_det
-    sign, log_gram = np.linalg.slogdet(system.jac_t.T @ system.jac_t)
-    return kkt_log_det - log_gram if sign > 0.0 else math.nan
+    gram, info = scipy.linalg.lapack.dpotrf(system.jac_t.T @ system.jac_t)  # Cholesky: det = prod(diagonal)^2
+    return kkt_log_det - 2.0 * float(np.sum(np.log(np.diagonal(gram)))) if info == 0 else math.nan
 
 
 @dataclass

@@ -375,7 +375,7 @@ def log_abs_det(banded_diagonal, factor, pivots):
     negative indices, a c - b^2)."""
     diagonal = np.diagonal(factor)
     total = float(np.sum(np.log(np.abs(banded_diagonal))))
-    if np.all(pivots > 0):
+    if pivots.min() > 0:
         return total + float(np.sum(np.log(np.abs(diagonal))))
     pairs = np.flatnonzero(pivots < 0)[0::2]  # the first row of each 2x2 block
     blocks = diagonal[pairs] * diagonal[pairs + 1] - factor[pairs + 1, pairs] ** 2
