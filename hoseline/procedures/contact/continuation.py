@@ -2,9 +2,12 @@
 
 As procedures/placement/continuation.py's follow, with the contact Newton
 (mechanics/contact_newton.py): each step starts from the previous equilibrium, which never
-penetrates, so the step filter keeps every later state out of the obstacles too.  A step that
-does not converge is halved, or, where the path bisects a fold that FoldWatch predicts from the
-lowest eigenvalues, shortened towards it.  Stability is checked at every step.  Where the path
+penetrates, so the step filter keeps every later state out of the obstacles too.  FoldWatch looks
+ahead for folds (the determinant of the tangent Hessian, free from the converged Newton's factor,
+asks the lowest eigenvalues where it falls towards zero): a step that would reach a predicted fold
+is shortened to stop before it, and the hose snaps just past it without a Newton try.  A step that
+does not converge is halved (or, where the path bisects a predicted fold, shortened towards it).
+Stability is checked at every step.  Where the path
 loses it (a step ends on an unstable equilibrium) or ends in a fold (the steps keep failing, or
 a predicted fold is reached: the hose snaps), the hose is relaxed downhill to a stable
 equilibrium at that fraction by the contact Newton's downhill mode (minimise_with_contact), the
@@ -190,19 +193,24 @@ class FoldWatch:
     another until close to the fold, where the two cross (an avoided crossing: each turns sharply), so the watch
     extrapolates the square of the product of the FOLD_MODES lowest (smooth through such a crossing, linear near the
     fold while the other stays finite) along the line through the last two equilibria to zero.
-    It acts only on evidence; otherwise the path halves its failed steps as before:
-    - it is asked (`failed`) only where the path is bisecting: at the second failed try in a row from an equilibrium
-      that was itself reached by a step shortened after a failure (a try that fails where half of it converges and
-      the path grows on from there was a step grown too long, as the loop's and the strut's failures: no eigenvalues);
-    - the predicted fold must lie in the later half of the failed try (the halving's next try stops short of it too):
-      the path steps APPROACH of the way to it, never much shorter than halving (the loop's dip at fraction 0.825,
-      predicted 3e-4 ahead of a failed try 0.025 long, is left to the halving);
+    It looks ahead (`ahead`, after each converged step):
+    - the eigenvalues (dense: contact_newton.lowest_stiffnesses, 0.5 ms for 50 segments, 3 ms for 100) are asked only
+      where the square of the determinant of that Hessian (NewtonReport.tangent_log_det, free from the converged
+      Newton's factor) extrapolates to zero within DETERMINANT_REACH of the next step, or after the first, short
+      (PROBE) step of a branch that starts at a snap;
+    - where they predict a fold in the later half of the next step (or anywhere in it after a probe), the path steps
+      APPROACH of the way to it (a fold first predicted nearer, in the first half, is no fold: a genuine one would have
+      been seen from the equilibrium before; the strut's lowest eigenvalues fall 17-fold as the hose slides on it and
+      rise again, and that prediction, 0.012 ahead of a step of 0.2, receded after each step towards it);
     - after each step towards it the next prediction must come nearer (`converged`), else the watch ends and the path
-      takes the step halving would have taken (`fallback`);
-    - once the fold is within two control.smallest (where halving makes its last try) after a prediction that came
-      nearer, the path steps control.smallest past it, where the hose snaps without a Newton try; if nothing stable is
-      found downhill there, the path halves as before and the watch is off for the branch (`trusted`).
-    The eigenvalues are dense (contact_newton.lowest_stiffnesses: 0.5 ms for 50 segments, 3 ms for 100).
+      takes the step it would have taken (`fallback`);
+    - once the fold is within two control.smallest after a prediction that came nearer, the path steps
+      control.smallest past it, where the hose snaps without a Newton try; if nothing stable is found downhill there,
+      the path halves as before and the watch is off for the branch (`trusted`).
+    Behind it, for a fold the look-ahead missed (`failed`): at the second failed try in a row from an equilibrium that
+    was itself reached by a step shortened after a failure (the path bisecting; a try that fails where half of it
+    converges and the path grows on from there was a step grown too long: no eigenvalues), a fold predicted in the
+    later half of the failed try is stepped towards as above, else the try is halved.
     """
 
     def __init__(self, props: RodProperties, probing: bool = False):
@@ -243,7 +251,8 @@ class FoldWatch:
             if near is None or near > t + DETERMINANT_REACH * dt:
                 return dt
         ahead = self.fold()
-        if ahead is None or not t < ahead <= min(t + dt, 1.0):  # (a fold past the path's end is not met)
+        nearest = t if probing else t + 0.5 * dt  # a fold first predicted in the first half of a step: see the class doc
+        if ahead is None or not nearest < ahead <= min(t + dt, 1.0):  # (a fold past the path's end is not met)
             return dt
         self.aim, self.fallback = ahead - t, dt
         return APPROACH * self.aim
