@@ -311,16 +311,16 @@ def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np
     return dense_step(hess, system.jac_t, system.grad, system.constraint)
 
 
-def tangent_log_det(system: ContactSystem, pivots) -> float:
-    """log |det| of the Hessian on the constraint tangent space, from the pivots of the KKT solve (_kkt_step): det KKT =
-    (-1)^m det(Jc Jc^T) det(Z^T H Z) for an orthonormal basis Z of the tangent space (NaN where Jc is rank deficient
-    or the solve failed)."""
+def tangent_log_det(jac_t: np.ndarray, pivots) -> float:
+    """log |det| of the Hessian on the constraint tangent space, from the pivots of the KKT solve (_kkt_step) and the
+    constraint Jacobian's transpose jac_t: det KKT = (-1)^m det(Jc Jc^T) det(Z^T H Z) for an orthonormal basis Z of the
+    tangent space (NaN where Jc is rank deficient or the solve failed)."""
     if pivots is None:
         return math.nan
     kkt_log_det = log_abs_det(*pivots)
-    if system.jac_t.shape[1] == 0:
+    if jac_t.shape[1] == 0:
         return kkt_log_det
-    gram, info = scipy.linalg.lapack.dpotrf(system.jac_t.T @ system.jac_t)  # Cholesky: det = prod(diagonal)^2
+    gram, info = scipy.linalg.lapack.dpotrf(jac_t.T @ jac_t)  # Cholesky: det = prod(diagonal)^2
     return kkt_log_det - 2.0 * float(np.sum(np.log(np.diagonal(gram)))) if info == 0 else math.nan
 
 
@@ -496,7 +496,7 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
                 # matrix with the barrier's stiff rows next to a nearly taut span; the eigenvalues decide
                 unstable = 0 if _lowest_mode(system)[0] >= -NEUTRAL else 1
             return state, NewtonReport(True, iteration, system.residual, unstable,
-                                       tangent_log_det=tangent_log_det(system, pivots))
+                                       factored=(system.jac_t, pivots))
         if iteration == max_iterations:
             break
         if not np.all(np.isfinite(step)):  # e.g. a free tip: its constraint rows are empty (see _multipliers)
@@ -747,7 +747,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
             continue
         if system.residual <= tolerance:
             return state, NewtonReport(True, iteration, system.residual, unstable,
-                                       tangent_log_det=tangent_log_det(system, pivots))
+                                       factored=(system.jac_t, pivots))
         if iteration == max_iterations:
             break
         plain_newton = unstable == 0 and sigma == 0.0 and system.residual < 1e-6 and np.all(np.isfinite(step))

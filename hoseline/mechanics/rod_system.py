@@ -51,8 +51,9 @@ class NewtonReport:
     residual: float
     unstable_directions: int
     message: str = ""
-    tangent_log_det: float = math.nan  # log |det| of the Hessian on the constraint tangent space where a contact solve
-    # converged (its factor gives it free; procedures/contact/continuation.FoldWatch watches it for folds), else NaN
+    factored: tuple | None = None  # where a contact solve converged, (Jc^T, the pivots of its last KKT solve), from
+    # which contact_newton.tangent_log_det gives the log |det| of the tangent Hessian without another factorisation
+    # (procedures/contact/continuation.FoldWatch watches it for folds); else None
 
 
 @dataclass

@@ -35,6 +35,7 @@ from hoseline.mechanics.contact_newton import (
     lowest_stiffnesses,
     minimise_with_contact,
     solve_with_contact,
+    tangent_log_det,
 )
 from hoseline.mechanics.newton import NewtonReport, RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
@@ -164,7 +165,8 @@ def follow_contact(
             trial, folds = relaxed, FoldWatch(props, probing=True)  # a new branch: a short first step, to see ahead
             dt, report = min(PROBE * control.first, 1.0 - t_next), downhill
         previous = (t, state) if start_from is None else None  # no secant across a snap
-        folds.add(t_next, trial, clamps, model_next, report.tangent_log_det)
+        folds.add(t_next, trial, clamps, model_next,
+                  math.nan if report.factored is None else tangent_log_det(*report.factored))
         state, t, clamps_now, placed = trial, t_next, clamps, placed_next
         if log is not None:
             log.steps += 1
@@ -195,7 +197,7 @@ class FoldWatch:
     fold while the other stays finite) along the line through the last two equilibria to zero.
     It looks ahead (`ahead`, after each converged step):
     - the eigenvalues (dense: contact_newton.lowest_stiffnesses, 0.5 ms for 50 segments, 3 ms for 100) are asked only
-      where the square of the determinant of that Hessian (NewtonReport.tangent_log_det, free from the converged
+      where the square of the determinant of that Hessian (contact_newton.tangent_log_det, free from the converged
       Newton's factor) extrapolates to zero within DETERMINANT_REACH of the next step, or after the first, short
       (PROBE) step of a branch that starts at a snap;
     - where they predict a fold in the later half of the next step (or anywhere in it after a probe), the path steps
@@ -225,7 +227,7 @@ class FoldWatch:
 
     def add(self, t: float, state: RodState, clamps: Clamps, model: ContactModel, log_det: float = math.nan) -> None:
         """An equilibrium of the branch at fraction t, held by `clamps`, against `model`; log_det: log |det| of its
-        Hessian on the constraint tangent space (NewtonReport.tangent_log_det), NaN if not known."""
+        Hessian on the constraint tangent space (contact_newton.tangent_log_det), NaN if not known."""
         self.points = self.points[-1:] + [[t, state, clamps, model, None, log_det]]
         self.bisecting, self.failures = self.failures > 0, 0
 
