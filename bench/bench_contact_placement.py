@@ -5,9 +5,10 @@ through a drum (cylinder of radius 30 mm), placed without contact, with the drum
 placement), with the drum and self-contact on, and with the drum present along the whole path (placement =
 "along_path"); the heavy hose of hoseline/demos/floor.py placed onto the floor its fittings point at (symmetric and
 asymmetric), against the same hose without the floor; and a planar loop closing on itself (1000 mm between coaxial mounts 150 mm apart, self-contact,
-50 segments; once, it takes tens of seconds); and the plectoneme (tests/test_contact_selfloop.py): 200 mm
-between coaxial mounts 100 mm apart twisted 720 deg, which snaps (the contact Newton's downhill mode) into a
-loop touching itself (once, about 10 s).  --mesh: the issue's case, the thesis hose (100 segments, 180 deg
+50 segments; once); and the plectoneme (tests/test_contact_selfloop.py, tests/test_contact_fold.py): 200 mm
+between coaxial mounts 100 mm apart twisted 720 and 1080 deg, which snaps (the contact Newton's downhill mode) at its
+folds and losses of stability (median of 5).  Each case also gives its failed path tries (Newton tries of the contact
+continuation that did not converge, counted in one more solve: contact_breakdown.failed_tries).  --mesh: the issue's case, the thesis hose (100 segments, 180 deg
 of twist) with one fixed clip at station 50 and self-contact, pushed 1 mm aside by a strut (a cylinder of
 radius 15 mm meshed with 100 000 triangles) at station 25, against the same hose with the clip and no
 contact, and with the strut as an analytic cylinder; with --sweep also each one's sweep of 200 poses, the end
@@ -29,7 +30,7 @@ from dataclasses import replace
 import numpy as np
 import trimesh
 
-from contact_breakdown import breakdown
+from contact_breakdown import breakdown, failed_tries
 from hoseline.demos.floor import ASYMMETRIC, SYMMETRIC, floor_data
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import problem_from_dict
@@ -126,9 +127,10 @@ def mesh_case() -> None:
             solve(problem, estimate_error=False)
             times.append(time.perf_counter() - started)
         gap = result.summary().get("contact", {}).get("min_gap_mm")
+        failed = failed_tries(lambda: solve(problem, estimate_error=False))
         print(f"{label:32s} median {1e3 * np.median(times):8.1f} ms (first {1e3 * first:.0f} ms)  {result.iterations:5d} "
-              f"Newton iterations  {result.steps:4d} steps" + (f"; smallest gap {gap:.4f} mm" if gap is not None else ""),
-              flush=True)
+              f"Newton iterations  {result.steps:4d} steps, {failed} failed"
+              + (f"; smallest gap {gap:.4f} mm" if gap is not None else ""), flush=True)
         if "--breakdown" in sys.argv and problem.contact:
             print_breakdown(breakdown(lambda: solve(problem, estimate_error=False)), float(np.median(times)), plain_time)
         elif not problem.contact:
@@ -192,23 +194,33 @@ def main() -> None:
             started = time.perf_counter()
             result = solve(problem, estimate_error=False)
             times.append(time.perf_counter() - started)
+        failed = failed_tries(lambda: solve(problem, estimate_error=False)) if problem.contact else 0
         print(f"{label:24s} median {1e3 * np.median(times):8.1f} ms  {result.iterations:5d} Newton iterations  "
-              f"{result.steps:4d} steps")
+              f"{result.steps:4d} steps, {failed} failed")
     if "--loop" in sys.argv:
         started = time.perf_counter()
         result = solve(problem_from_dict(LOOP), estimate_error=False)
         contact = result.contacts[0]
+        failed = failed_tries(lambda: solve(problem_from_dict(LOOP), estimate_error=False))
         print(f"{'loop closing on itself':24s} once   {time.perf_counter() - started:8.1f} s   {result.iterations:5d} Newton "
-              f"iterations  {result.steps:4d} steps; smallest gap {contact.min_gap:.4f} mm, "
+              f"iterations  {result.steps:4d} steps, {failed} failed; smallest gap {contact.min_gap:.4f} mm, "
               f"push {float(np.linalg.norm(contact.total_force)):.3f} N at s = {contact.arc_length} mm")
-    if "--plectoneme" in sys.argv:
-        started = time.perf_counter()
-        result = solve(problem_from_dict(PLECTONEME), estimate_error=False)
-        contact = result.contacts[0]
-        snaps = sum("snaps downhill" in event for event in result.events)
-        print(f"{'plectoneme (720 deg)':24s} once   {time.perf_counter() - started:8.1f} s   {result.iterations:5d} Newton "
-              f"iterations  {result.steps:4d} steps, {snaps} snap(s); smallest gap {contact.min_gap:.4f} mm, "
-              f"stable {result.stable}")
+    if "--plectoneme" in sys.argv:  # twisted two and three turns, median of 5 solves after a first
+        for turns in (2, 3):
+            problem = problem_from_dict(PLECTONEME | {"end": PLECTONEME["end"] | {"twist": 360.0 * turns}})
+            result = solve(problem, estimate_error=False)
+            times = []
+            for _ in range(5):
+                started = time.perf_counter()
+                solve(problem, estimate_error=False)
+                times.append(time.perf_counter() - started)
+            contact = result.contacts[0]
+            snaps = sum("snaps downhill" in event for event in result.events)
+            failed = failed_tries(lambda: solve(problem, estimate_error=False))
+            print(f"{f'plectoneme ({360 * turns} deg)':24s} median {1e3 * np.median(times):8.1f} ms  {result.iterations:5d} "
+                  f"Newton iterations  {result.steps:4d} steps, {failed} failed, {snaps} snap(s); smallest gap "
+                  f"{contact.min_gap:.4f} mm, energy {result.elastic_energy:.3f} N*mm, stable {result.stable}")
+    print(f"load average {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

@@ -116,3 +116,20 @@ def _replaced(replacements):
     finally:
         for owner, name, original in reversed(originals):
             setattr(owner, name, original)
+
+
+def failed_tries(solve_once) -> int:
+    """The path steps of the contact continuation whose Newton try did not converge in solve_once() (a placement with
+    contact): steps grown too long and tries that bracket or meet a fold."""
+    failed = [0]
+
+    def step(original):
+        def call(*args, **kwargs):
+            trial, report = original(*args, **kwargs)
+            failed[0] += not report.converged
+            return trial, report
+        return call
+
+    with _replaced([(continuation, "_step", step)]):
+        solve_once()
+    return failed[0]

@@ -138,7 +138,7 @@ def test_the_downhill_merit_model_predicts_the_merit_of_a_step_cut_short(sigma):
     props, arch, lowered = _lowered_arch(0.5)
     model = ContactModel(2.0, 0.5, 2.0)  # nothing to touch
     system = evaluate_contact(props, lowered, arch, model)
-    step, force_step, _ = _kkt_step(system, sigma)
+    step, force_step, _, _ = _kkt_step(system, sigma)
     multipliers = _multipliers(lowered, arch)
     whole = merit_model(system, 1.0, step, 0.0, 1.0)[0]  # the Lagrangian's part alone (the penalty ~0)
     weighty = 4.0 * abs(whole) / float(system.constraint @ system.constraint)  # the penalty's part as large, or more

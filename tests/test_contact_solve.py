@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy.linalg import null_space
 
-from hoseline.mechanics.contact_newton import ContactModel, _kkt_step, evaluate_contact
-from hoseline.mechanics.contact_solve import banded_step, dense_step, kkt_solves
+from hoseline.mechanics.contact_newton import ContactModel, _kkt_step, evaluate_contact, tangent_log_det
+from hoseline.mechanics.contact_solve import banded_step, dense_step, kkt_solves, log_abs_det
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, ClipHold, RodState, centerline
 from hoseline.mechanics.rotations import frame_from_tangent
@@ -93,10 +93,12 @@ def test_step_multipliers_and_inertia_equal_the_dense_solve(name):
         system = evaluate_contact(props, clamps, state, model)
         solved = banded_step(system.band, system.jac_t, system.columns, system.signs, system.grad, system.constraint)
         assert solved is not None
-        step, mu, unstable = solved
+        step, mu, unstable, pivots = solved
         reference = dense_step(system.dense(), system.jac_t, system.grad, system.constraint)
         assert _close(step, reference[0]) and _close(mu, reference[1])
         assert unstable == reference[2]
+        dense_log_det = log_abs_det(*reference[3])
+        assert log_abs_det(*pivots) == pytest.approx(dense_log_det, abs=1e-8 * abs(dense_log_det) + 1e-8)
 
 
 def test_unstable_directions_are_counted_as_the_dense_solve_does():
@@ -110,12 +112,15 @@ def test_unstable_directions_are_counted_as_the_dense_solve_does():
         planes = np.array([[0.0, 0.0, nodes[:, 2].min() - RADIUS - 0.3, 0.0, 0.0, 1.0]])
         system = evaluate_contact(props, clamps, state, ContactModel(RADIUS, D_HAT, KAPPA, planes=planes))
         assert len(system.pairs[0]) >= 3
-        step, mu, unstable = banded_step(system.band, system.jac_t, system.columns, system.signs, system.grad,
-                                         system.constraint)
+        step, mu, unstable, pivots = banded_step(system.band, system.jac_t, system.columns, system.signs, system.grad,
+                                                  system.constraint)
         reference = dense_step(system.dense(), system.jac_t, system.grad, system.constraint)
         assert _close(step, reference[0]) and _close(mu, reference[1])
         tangent_space = null_space(system.jac_t.T)
-        assert unstable == reference[2] == np.sum(np.linalg.eigvalsh(tangent_space.T @ system.dense() @ tangent_space) < 0)
+        values = np.linalg.eigvalsh(tangent_space.T @ system.dense() @ tangent_space)
+        assert unstable == reference[2] == np.sum(values < 0)
+        # the fold watch's determinant: the tangent space's, from the KKT factor (det KKT = +-det(Jc Jc^T) det(Z^T H Z))
+        assert tangent_log_det(system.jac_t, pivots) == pytest.approx(np.sum(np.log(np.abs(values))), rel=1e-9)
         counts[pull] = unstable
     assert counts[50.0] == 0 and 0 < counts[-2e3] < counts[-5e3], counts
 
@@ -132,7 +137,7 @@ def test_a_singular_banded_part_falls_back_to_the_dense_solve():
     assert banded_step(system.band, system.jac_t, system.columns, system.signs, system.grad, system.constraint) is None
     system.stations = (system.band, *system.stations[1:])
     before = kkt_solves["dense"]
-    step, mu, unstable = _kkt_step(system)
+    step, mu, unstable, _ = _kkt_step(system)
     assert kkt_solves["dense"] == before + 1
     reference = dense_step(system.dense(), system.jac_t, system.grad, system.constraint)
     np.testing.assert_array_equal(step, reference[0])

@@ -66,6 +66,7 @@ from hoseline.mechanics.contact_mesh import MeshArrays, swept_edges_clear
 from hoseline.mechanics.contact_solve import (
     banded_step,
     dense_step,
+    log_abs_det,
     kkt_solves,
     low_rank_columns,
     rotation_gradient_and_band,
@@ -288,8 +289,9 @@ def evaluate_contact(props: RodProperties, clamps: Clamps, state: RodState, mode
                          (base.band, state.frames, h, node_grad, node_hess, index))
 
 
-def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int]:
-    """(step, multiplier step, unstable directions on the constraint tangent space) of the KKT system.
+def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, int, float]:
+    """(step, multiplier step, unstable directions on the constraint tangent space, the pivots of the solve, whose
+    contact_solve.log_abs_det is that of the KKT matrix) of the KKT system.
 
     The banded factor with the low-rank border (contact_solve.banded_step); the dense matrix and
     LAPACK's sytrf where that is not to be trusted (counted in contact_solve.kkt_solves).
@@ -307,6 +309,19 @@ def _kkt_step(system: ContactSystem, shift: float = 0.0) -> tuple[np.ndarray, np
     hess = system.dense()
     hess[np.diag_indices_from(hess)] += shift
     return dense_step(hess, system.jac_t, system.grad, system.constraint)
+
+
+def tangent_log_det(jac_t: np.ndarray, pivots) -> float:
+    """log |det| of the Hessian on the constraint tangent space, from the pivots of the KKT solve (_kkt_step) and the
+    constraint Jacobian's transpose jac_t: det KKT = (-1)^m det(Jc Jc^T) det(Z^T H Z) for an orthonormal basis Z of the
+    tangent space (NaN where Jc is rank deficient or the solve failed)."""
+    if pivots is None:
+        return math.nan
+    kkt_log_det = log_abs_det(*pivots)
+    if jac_t.shape[1] == 0:
+        return kkt_log_det
+    gram, info = scipy.linalg.lapack.dpotrf(jac_t.T @ jac_t)  # Cholesky: det = prod(diagonal)^2
+    return kkt_log_det - 2.0 * float(np.sum(np.log(np.diagonal(gram)))) if info == 0 else math.nan
 
 
 @dataclass
@@ -473,14 +488,15 @@ def _solve_with_contact(props, clamps, state, model, tolerance, max_iterations, 
     for iteration in range(max_iterations + 1):
         if not np.isfinite(system.residual):
             return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
-        step, force_step, unstable = _kkt_step(system)
+        step, force_step, unstable, pivots = _kkt_step(system)
         if system.residual <= tolerance:
             if unstable > 0 and _lowest_mode(system)[0] >= -NEUTRAL:
                 unstable = 0  # the pivots counted an eigenvalue that is zero to rounding (see NEUTRAL_MODE)
             elif unstable < 0:  # an impossible count (fewer negative pivots than constraints): rounding in a KKT
                 # matrix with the barrier's stiff rows next to a nearly taut span; the eigenvalues decide
                 unstable = 0 if _lowest_mode(system)[0] >= -NEUTRAL else 1
-            return state, NewtonReport(True, iteration, system.residual, unstable)
+            return state, NewtonReport(True, iteration, system.residual, unstable,
+                                       factored=(system.jac_t, pivots))
         if iteration == max_iterations:
             break
         if not np.all(np.isfinite(step)):  # e.g. a free tip: its constraint rows are empty (see _multipliers)
@@ -719,7 +735,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
     for iteration in range(max_iterations + 1):
         if not np.isfinite(system.residual):
             return state, NewtonReport(False, iteration, system.residual, -1, "non-finite residual")
-        step, force_step, unstable = _kkt_step(system)
+        step, force_step, unstable, pivots = _kkt_step(system)
         if system.residual <= tolerance and unstable != 0 and iteration < max_iterations:
             if _lowest_mode(system)[0] >= -NEUTRAL:  # the KKT pivots counted a rounding-level eigenvalue
                 return state, NewtonReport(True, iteration, system.residual, 0, NEUTRAL_MODE)
@@ -730,7 +746,8 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
             state, system = pushed
             continue
         if system.residual <= tolerance:
-            return state, NewtonReport(True, iteration, system.residual, unstable)
+            return state, NewtonReport(True, iteration, system.residual, unstable,
+                                       factored=(system.jac_t, pivots))
         if iteration == max_iterations:
             break
         plain_newton = unstable == 0 and sigma == 0.0 and system.residual < 1e-6 and np.all(np.isfinite(step))
@@ -740,7 +757,7 @@ def _minimise_with_contact(props, clamps, state, model, tolerance, max_iteration
         for _ in range(40):
             if not plain_newton and (sigma > 0.0 or unstable != 0 or not np.all(np.isfinite(step))):
                 sigma = max(sigma, sigma_floor)
-                step, force_step, shifted_unstable = _kkt_step(system, sigma)
+                step, force_step, shifted_unstable, _ = _kkt_step(system, sigma)
                 if shifted_unstable != 0 or not np.all(np.isfinite(step)):
                     sigma *= 10.0
                     continue

@@ -307,7 +307,9 @@ def kkt_residual(band, columns, signs, jac_t, grad, constraint, step, mu):
 
 
 def banded_step(band, jac_t, columns, signs, grad, constraint):
-    """(step, mu, unstable directions) of [[B + U diag(sigma) U^T, Jc^T], [Jc, 0]] [p; -mu] = [-grad; -constraint].
+    """(step, mu, unstable directions, pivots) of [[B + U diag(sigma) U^T, Jc^T], [Jc, 0]] [p; -mu] = [-grad;
+    -constraint].  pivots: (B's diagonal, S's sytrf factor and pivot indices), whose log_abs_det is the KKT matrix's:
+    det M = det B det S = det(-diag sigma) det KKT, |sigma_e| = 1 (worked out only where asked: at a converged state).
 
     band: B in lower band storage; jac_t (n, m) = Jc^T; columns (n, r) = U; signs (r,) = sigma.  None when the
     banded factor is not to be trusted: a tiny pivot of B, a singular Schur complement, a backward error above
@@ -342,14 +344,15 @@ def banded_step(band, jac_t, columns, signs, grad, constraint):
     unstable = negative + negative_pivots(factor, pivots) - int(np.sum(signs > 0.0)) - m
     if unstable < 0:  # an impossible inertia: a nearly singular B or S miscounted by rounding; the dense solve decides
         return None
-    return step, mu, int(unstable)
+    return step, mu, int(unstable), (diag, factor, pivots)
 
 
 def dense_step(hess, jac_t, grad, constraint):
-    """(step, mu, unstable directions) of the dense KKT system by LAPACK's sytrf (the reference and the fall-back).
+    """(step, mu, unstable directions, pivots) of the dense KKT system by LAPACK's sytrf (the reference and the
+    fall-back); pivots as banded_step's (no banded part).
 
     The inertia of the KKT matrix is that of its D (1x1 and 2x2 blocks, Sylvester's law); the
-    unstable directions on the constraint tangent space are neg(KKT) - m.  NaN and -1 when the
+    unstable directions on the constraint tangent space are neg(KKT) - m.  NaN, -1 and None when the
     solve fails.
     """
     n, m = jac_t.shape
@@ -362,8 +365,21 @@ def dense_step(hess, jac_t, grad, constraint):
         raise ValueError(f"LAPACK dsytrf: argument {-info} is invalid")
     solution, info = lapack.dsytrs(factor, pivots, np.concatenate([-grad, -constraint]), lower=1)
     if info != 0 or not np.all(np.isfinite(solution)):
-        return np.full(n, np.nan), np.full(m, np.nan), -1
-    return solution[:n], -solution[n:], negative_pivots(factor, pivots) - m
+        return np.full(n, np.nan), np.full(m, np.nan), -1, None
+    return solution[:n], -solution[n:], negative_pivots(factor, pivots) - m, (np.ones(0), factor, pivots)
+
+
+def log_abs_det(banded_diagonal, factor, pivots):
+    """log |det| of the KKT matrix from the pivots of its solve (banded_step's or dense_step's): the banded part's
+    diagonal, and D of a sytrf factor (lower): its 1x1 blocks (a positive pivot index) and 2x2 blocks (a pair of equal
+    negative indices, a c - b^2)."""
+    diagonal = np.diagonal(factor)
+    total = float(np.sum(np.log(np.abs(banded_diagonal))))
+    if pivots.min() > 0:
+        return total + float(np.sum(np.log(np.abs(diagonal))))
+    pairs = np.flatnonzero(pivots < 0)[0::2]  # the first row of each 2x2 block
+    blocks = diagonal[pairs] * diagonal[pairs + 1] - factor[pairs + 1, pairs] ** 2
+    return total + float(np.sum(np.log(np.abs(diagonal[pivots > 0]))) + np.sum(np.log(np.abs(blocks))))
 
 
 @njit(cache=True)

@@ -51,6 +51,9 @@ class NewtonReport:
     residual: float
     unstable_directions: int
     message: str = ""
+    factored: tuple | None = None  # where a contact solve converged, (Jc^T, the pivots of its last KKT solve), from
+    # which contact_newton.tangent_log_det gives the log |det| of the tangent Hessian without another factorisation
+    # (procedures/contact/continuation.FoldWatch watches it for folds); else None
 
 
 @dataclass

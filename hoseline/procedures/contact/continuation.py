@@ -2,9 +2,12 @@
 
 As procedures/placement/continuation.py's follow, with the contact Newton
 (mechanics/contact_newton.py): each step starts from the previous equilibrium, which never
-penetrates, so the step filter keeps every later state out of the obstacles too.  A step that
-does not converge is halved, or, where the path bisects a fold that FoldWatch predicts from the
-lowest eigenvalues, shortened towards it.  Stability is checked at every step.  Where the path
+penetrates, so the step filter keeps every later state out of the obstacles too.  FoldWatch looks
+ahead for folds (the determinant of the tangent Hessian, free from the converged Newton's factor,
+asks the lowest eigenvalues where it falls towards zero): a step that would reach a predicted fold
+is shortened to stop before it, and the hose snaps just past it without a Newton try.  A step that
+does not converge is halved (or, where the path bisects a predicted fold, shortened towards it).
+Stability is checked at every step.  Where the path
 loses it (a step ends on an unstable equilibrium) or ends in a fold (the steps keep failing, or
 a predicted fold is reached: the hose snaps), the hose is relaxed downhill to a stable
 equilibrium at that fraction by the contact Newton's downhill mode (minimise_with_contact), the
@@ -32,6 +35,7 @@ from hoseline.mechanics.contact_newton import (
     lowest_stiffnesses,
     minimise_with_contact,
     solve_with_contact,
+    tangent_log_det,
 )
 from hoseline.mechanics.newton import NewtonReport, RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
@@ -56,6 +60,10 @@ FOLD_MODES = 2  # the lowest eigenvalues the fold predictor extrapolates to zero
 # not the lowest until close to it: on the plectoneme's first fold it was the second lowest 0.007 of the path before)
 APPROACH = 0.75  # of the distance to a predicted fold: the step taken towards it (a late prediction is not passed;
 # on the plectoneme they came early: 0.640, 0.652, 0.658 from 0.604 on, for a fold at 0.6616)
+DETERMINANT_REACH = 4.0  # of the next step: a fold the determinant predicts within it has the eigenvalues asked (the
+# determinant's other factors fall too: on the plectoneme 0.06 of the path before its first fold it predicted it 0.24 ahead)
+PROBE = 0.01  # of control.first: the first step of a branch after a snap, from which the eigenvalues see a fold ahead (the
+# plectoneme's second fold lies 0.0061 of its twist phase, 0.15 of its first step, past the first)
 SMALLEST_MOVE = 1e-9  # of the path: the shortest step the move check of moving obstacles halves down to (an obstacle
 # pushing the hose may move less than the gap, d_hat / 2 or less, per step until there is a prediction)
 
@@ -91,7 +99,7 @@ def follow_contact(
     previous = None if before is None else (start - 1.0, before)  # for the secant prediction
     t, dt, iterations, snaps = start, min(control.first, 1.0 - start), 0, 0
     folds = FoldWatch(props)
-    folds.add(t, state, clamps_now, placed.model if moving is not None else model)
+    folds.add(t, state, clamps_now, placed.model if moving is not None else model)  # (its determinant not known)
     fold_at = None  # a fold predicted just before t + dt: the hose snaps at t + dt without a Newton try
     while t < 1.0 - 1e-14:
         t_next = min(1.0, t + dt)
@@ -154,9 +162,11 @@ def follow_contact(
                     f"{MOST_SNAPS} times on the way (it keeps meeting folds: a hose coiling onto itself or creeping "
                     f"along an obstacle); segments {h:.3g} mm long for a hose of outer radius {model_radius(model):.3g} mm"
                     " may be too coarse to follow it: try more segments, less twist or obstacles further from the path")
-            trial, dt, folds = relaxed, min(control.first, 1.0 - t_next), FoldWatch(props)  # a new branch
+            trial, folds = relaxed, FoldWatch(props, probing=True)  # a new branch: a short first step, to see ahead
+            dt, report = min(PROBE * control.first, 1.0 - t_next), downhill
         previous = (t, state) if start_from is None else None  # no secant across a snap
-        folds.add(t_next, trial, clamps, model_next)
+        folds.add(t_next, trial, clamps, model_next,
+                  math.nan if report.factored is None else tangent_log_det(*report.factored))
         state, t, clamps_now, placed = trial, t_next, clamps, placed_next
         if log is not None:
             log.steps += 1
@@ -165,8 +175,13 @@ def follow_contact(
         fold_at = None
         if folds.aim is not None:  # this step went towards a predicted fold
             dt, fold_at = folds.converged(t, control)
-        elif start_from is None and report.iterations <= control.fast_iterations:
-            dt = min(control.largest, 2.0 * dt)
+        elif start_from is None:
+            grown = dt
+            if folds.probing:  # the first step of a branch after a snap: on at the usual first step, if no fold is near
+                grown = control.first
+            elif report.iterations <= control.fast_iterations:
+                grown = min(control.largest, 2.0 * dt)
+            dt = folds.ahead(t, grown)
     state, used = polish(props, path(1.0), state, placed.model if moving is not None else model, log)
     return state, iterations + used
 
@@ -180,34 +195,69 @@ class FoldWatch:
     another until close to the fold, where the two cross (an avoided crossing: each turns sharply), so the watch
     extrapolates the square of the product of the FOLD_MODES lowest (smooth through such a crossing, linear near the
     fold while the other stays finite) along the line through the last two equilibria to zero.
-    It acts only on evidence; otherwise the path halves its failed steps as before:
-    - it is asked (`failed`) only where the path is bisecting: at the second failed try in a row from an equilibrium
-      that was itself reached by a step shortened after a failure (a try that fails where half of it converges and
-      the path grows on from there was a step grown too long, as the loop's and the strut's failures: no eigenvalues);
-    - the predicted fold must lie in the later half of the failed try (the halving's next try stops short of it too):
-      the path steps APPROACH of the way to it, never much shorter than halving (the loop's dip at fraction 0.825,
-      predicted 3e-4 ahead of a failed try 0.025 long, is left to the halving);
+    It looks ahead (`ahead`, after each converged step):
+    - the eigenvalues (dense: contact_newton.lowest_stiffnesses, 0.5 ms for 50 segments, 3 ms for 100) are asked only
+      where the square of the determinant of that Hessian (contact_newton.tangent_log_det, free from the converged
+      Newton's factor) extrapolates to zero within DETERMINANT_REACH of the next step, or after the first, short
+      (PROBE) step of a branch that starts at a snap;
+    - where they predict a fold in the later half of the next step (or anywhere in it after a probe), the path steps
+      APPROACH of the way to it (a fold first predicted nearer, in the first half, is no fold: a genuine one would have
+      been seen from the equilibrium before; the strut's lowest eigenvalues fall 17-fold as the hose slides on it and
+      rise again, and that prediction, 0.012 ahead of a step of 0.2, receded after each step towards it);
     - after each step towards it the next prediction must come nearer (`converged`), else the watch ends and the path
-      takes the step halving would have taken (`fallback`);
-    - once the fold is within two control.smallest (where halving makes its last try) after a prediction that came
-      nearer, the path steps control.smallest past it, where the hose snaps without a Newton try; if nothing stable is
-      found downhill there, the path halves as before and the watch is off for the branch (`trusted`).
-    The eigenvalues are dense (contact_newton.lowest_stiffnesses: 0.5 ms for 50 segments, 3 ms for 100).
+      takes the step it would have taken (`fallback`);
+    - once the fold is within two control.smallest after a prediction that came nearer, the path steps
+      control.smallest past it, where the hose snaps without a Newton try; if nothing stable is found downhill there,
+      the path halves as before and the watch is off for the branch (`trusted`).
+    Behind it, for a fold the look-ahead missed (`failed`): at the second failed try in a row from an equilibrium that
+    was itself reached by a step shortened after a failure (the path bisecting; a try that fails where half of it
+    converges and the path grows on from there was a step grown too long: no eigenvalues), a fold predicted in the
+    later half of the failed try is stepped towards as above, else the try is halved.
     """
 
-    def __init__(self, props: RodProperties):
+    def __init__(self, props: RodProperties, probing: bool = False):
         self.props = props
-        self.points: list[list] = []  # [t, state, clamps, model, product^2 or None] of the last two equilibria
+        self.points: list[list] = []  # [t, state, clamps, model, product^2 or None, log |det|] of the last two
+        self.probing = probing  # the branch starts at a snap: its first step is short, and the eigenvalues are asked
         self.aim: float | None = None  # the distance (fraction) to the fold the last step went towards, if it did
         self.fallback = 0.0  # the step that halving would have taken: where the fold recedes, the path goes on with it
         self.failures = 0  # path steps from the last equilibrium that failed
         self.bisecting = False  # the last equilibrium was reached by a step shortened after a failure
         self.trusted = True  # False once a predicted fold proved wrong on this branch (nothing stable past it)
 
-    def add(self, t: float, state: RodState, clamps: Clamps, model: ContactModel) -> None:
-        """An equilibrium of the branch at fraction t, held by `clamps`, against `model`."""
-        self.points = self.points[-1:] + [[t, state, clamps, model, None]]
+    def add(self, t: float, state: RodState, clamps: Clamps, model: ContactModel, log_det: float = math.nan) -> None:
+        """An equilibrium of the branch at fraction t, held by `clamps`, against `model`; log_det: log |det| of its
+        Hessian on the constraint tangent space (contact_newton.tangent_log_det), NaN if not known."""
+        self.points = self.points[-1:] + [[t, state, clamps, model, None, log_det]]
         self.bisecting, self.failures = self.failures > 0, 0
+
+    def _determinant_fold(self) -> float | None:
+        """The fraction where the square of the determinant of the Hessian on the constraint tangent space (the product
+        of all its eigenvalues, which the converged Newton's factor gives free) extrapolates to zero along the line
+        through the last two equilibria, or None (fewer, a determinant not known, or not falling)."""
+        if len(self.points) < 2:
+            return None
+        (t0, *_, before), (t1, *_, now) = self.points[-2:]
+        ratio = math.exp(2.0 * (now - before))  # det^2 now / det^2 before (NaN where either is not known)
+        return t1 + ratio * (t1 - t0) / (1.0 - ratio) if ratio < 1.0 else None
+
+    def ahead(self, t: float, dt: float) -> float:
+        """The next step from the equilibrium at fraction t, where the path would step dt: APPROACH of the way to a fold
+        the lowest eigenvalues predict within dt (the watch starts), asked where the determinant predicts a fold within
+        DETERMINANT_REACH * dt or on the first step after a snap; else dt."""
+        probing, self.probing = self.probing, False
+        if not self.trusted:
+            return dt
+        if not probing:
+            near = self._determinant_fold()
+            if near is None or near > t + DETERMINANT_REACH * dt:
+                return dt
+        ahead = self.fold()
+        nearest = t if probing else t + 0.5 * dt  # a fold first predicted in the first half of a step: see the class doc
+        if ahead is None or not nearest < ahead <= min(t + dt, 1.0):  # (a fold past the path's end is not met)
+            return dt
+        self.aim, self.fallback = ahead - t, dt
+        return APPROACH * self.aim
 
     def _squared(self, point: list) -> float:
         """The product of the FOLD_MODES lowest eigenvalues at an equilibrium, squared (NaN if there are fewer)."""
