@@ -24,7 +24,9 @@ from test_studio_contact import resting_hose
 from test_studio_server import clipped_thesis_problem
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import problem_from_dict, problem_to_dict
+from hoseline.studio.messages import Target
 from hoseline.studio.session import Session
+from hoseline.studio.view import state_message
 
 SAVED_TO_SHOWN_MM = 0.1  # the issue's bound between the shape shown and the saved file solved
 
@@ -290,10 +292,21 @@ def test_a_drag_along_the_floor_then_a_turn_saves_as_shown_or_says_how_far_off(b
         assert errors == []
 
 
+def moved_along_the_floor(steps: int = 10) -> Session:
+    """The resting hose's end fitting dragged 10 mm along the floor towards the start in `steps` equal steps, by the
+    server as a drag would: in 10 steps the hose ends on a branch no fresh placement reaches at any twist (15.7 mm off
+    at best), in 20 on one it reaches (which branch depends on the states the drag passes through)."""
+    session = Session(resting_hose())
+    end = state_message(session)["fittings"]["end"]
+    for k in range(1, steps + 1):
+        point = np.array(end["point"]) - [10.0 * k / steps, 0.0, 0.0]
+        session.apply(Target(type="set", seq=k, end={"point": point.tolist(), "quaternion": end["quaternion"]}))
+    return session
+
+
 def test_where_no_file_gives_the_shape_shown_save_asks_and_each_choice_solves_as_it_says(browser, tmp_path):
-    """10 mm along the floor the dragged hose lies on a branch no fresh placement reaches, whatever the twist."""
-    with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
-        snapped_drag(page, "end", "Z", "moved 10 mm [-10, 0, 0]")
+    """10 mm along the floor in 10 steps the hose lies on a branch no fresh placement reaches, whatever the twist."""
+    with opened_page(browser, moved_along_the_floor(), tmp_path) as (page, errors, _):
         page.click("#save")
         page.wait_for_selector("#save-choice a.save-moved", timeout=60000)
         comparison = page.evaluate("() => window.studio.state.comparison")

@@ -318,19 +318,23 @@ def write_study_data(outcome: StudyOutcome, folder: Path, base_path: Path) -> No
         write_text(folder / "design_grid.csv", design_grid_csv(outcome))
 
 
+def _write_hose(problem, study, folder: Path, kind: str, quantity_name: str, header: str, base_path: Path) -> None:
+    """KIND/QUANTITY/problem.toml (and sweep.toml for a sweep study) in `folder`: the hose `problem` with a header
+    comment saying what it is."""
+    target = folder / kind / quantity_name.replace(":", "_")
+    target.mkdir(parents=True, exist_ok=True)
+    write_text(target / "problem.toml", header + problem_to_toml(problem))
+    if study.base.sweep is not None:
+        write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))
+
+
 def _write_worst(outcome: StudyOutcome, folder: Path, base_path: Path) -> None:
     """worst/QUANTITY/problem.toml (and sweep.toml for a sweep) for the worst sample of every limit."""
     study = outcome.study
     for limit, index in zip(study.limits, outcome.worst):
-        if index is None:
-            continue
-        problem = study.sample_problem(index)
-        target = folder / "worst" / limit.quantity.name.replace(":", "_")
-        target.mkdir(parents=True, exist_ok=True)
-        header = f"# sample {index} of study '{study.name}': the worst {limit.quantity.name}\n"
-        write_text(target / "problem.toml", header + problem_to_toml(problem))
-        if study.base.sweep is not None:
-            write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))
+        if index is not None:
+            _write_hose(study.sample_problem(index), study, folder, "worst", limit.quantity.name,
+                        f"# sample {index} of study '{study.name}': the worst {limit.quantity.name}\n", base_path)
 
 
 def _write_design_points(outcome: StudyOutcome, folder: Path, base_path: Path) -> None:
@@ -338,30 +342,20 @@ def _write_design_points(outcome: StudyOutcome, folder: Path, base_path: Path) -
     limit FORM judged (the hose with the deviations that break it first)."""
     study = outcome.study
     for event in outcome.rare_events:
-        if not event.point.converged:
-            continue
-        problem = perturbed(study.base.problem, event.deviation)
-        target = folder / "design_point" / event.limit.quantity.name.replace(":", "_")
-        target.mkdir(parents=True, exist_ok=True)
-        header = (f"# the most probable failure point of {event.limit.describe()} in study '{study.name}': "
-                  f"beta {event.point.beta:.4g}, FORM P {event.form:.3g}\n")
-        write_text(target / "problem.toml", header + problem_to_toml(problem))
-        if study.base.sweep is not None:
-            write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))
+        if event.point.converged:
+            _write_hose(perturbed(study.base.problem, event.deviation), study, folder, "design_point",
+                        event.limit.quantity.name,
+                        f"# the most probable failure point of {event.limit.describe()} in study '{study.name}': "
+                        f"beta {event.point.beta:.4g}, FORM P {event.form:.3g}\n", base_path)
 
 
 def _write_corners(outcome: StudyOutcome, folder: Path, base_path: Path) -> None:
     """worst_case/QUANTITY/problem.toml (and sweep.toml for a sweep): the hose at each quantity's worst-case corner."""
     study = outcome.study
     for case in outcome.worst_cases:
-        problem = perturbed(study.base.problem, case.corner)
-        target = folder / "worst_case" / case.quantity.name.replace(":", "_")
-        target.mkdir(parents=True, exist_ok=True)
-        header = (f"# the worst-case corner of {case.quantity.name} in study '{study.name}': first order "
-                  f"{case.first_order:.6g}, solved {case.solved:.6g} {case.quantity.unit}\n")
-        write_text(target / "problem.toml", header + problem_to_toml(problem))
-        if study.base.sweep is not None:
-            write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))
+        _write_hose(perturbed(study.base.problem, case.corner), study, folder, "worst_case", case.quantity.name,
+                    f"# the worst-case corner of {case.quantity.name} in study '{study.name}': first order "
+                    f"{case.first_order:.6g}, solved {case.solved:.6g} {case.quantity.unit}\n", base_path)
 
 
 def sweep_toml(problem, base_path: Path) -> str:

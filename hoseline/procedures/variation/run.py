@@ -207,16 +207,7 @@ def _rare_events(engine: Engine, context: StudyContext, study: Study, stores: Ca
     limits = study.reliability_limits()
     sorm = options.method == "sorm"
     tasks = [RareTask(limit, study.variation, sorm) for limit in limits]
-    store = stores("form")
-    results = store.finished()
-
-    def keep(k: int, arrays: dict[str, np.ndarray]) -> None:
-        store.save(k, arrays)
-        results[k] = arrays
-        if progress is not None:
-            progress("rare failures (FORM)", len(results) / len(tasks))
-
-    engine.map(rare_event, context, tasks, keep, done=set(results))
+    results = _stored_map(engine, rare_event, context, tasks, stores("form"), "rare failures (FORM)", progress)
     events = [RareEvent.from_arrays(limit, study.variation, results[k], sorm) for k, limit in enumerate(limits)]
     names = [q.name for q in study.quantities]
     columns = [names.index(limit.quantity.name) for limit in limits]
@@ -251,14 +242,21 @@ def _refine(engine: Engine, context: StudyContext, tasks: list[RefineTask], stor
     interrupted study does not search the finished lengths again)."""
     if not tasks:
         return []
-    store = stores("optimise")
+    results = _stored_map(engine, refine_length, context, tasks, stores("optimise"), "design optimiser", progress)
+    return [results[k] for k in range(len(tasks))]
+
+
+def _stored_map(engine: Engine, function, context: StudyContext, tasks: list, store: BatchStore, label: str,
+                progress: Progress | None) -> dict[int, dict[str, np.ndarray]]:
+    """{task index: arrays} of `function` over `tasks` on the engine, each result kept in `store` as it comes (so an
+    interrupted study does not do the finished tasks again), progress reported under `label`."""
     results = store.finished()
 
     def keep(k: int, arrays: dict[str, np.ndarray]) -> None:
         store.save(k, arrays)
         results[k] = arrays
         if progress is not None:
-            progress("design optimiser", len(results) / len(tasks))
+            progress(label, len(results) / len(tasks))
 
-    engine.map(refine_length, context, tasks, keep, done=set(results))
-    return [results[k] for k in range(len(tasks))]
+    engine.map(function, context, tasks, keep, done=set(results))
+    return results
