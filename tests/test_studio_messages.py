@@ -13,7 +13,7 @@ import pytest
 
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.studio.session import Session
-from test_studio_browser import browser, opened_page, pytestmark  # noqa: F401 (the fixture, the skip mark)
+from test_studio_browser import browser, drawn_after, opened_page, pytestmark  # noqa: F401 (the fixture, the skip mark)
 
 LENGTH, SLACK = 185.0, 25.0  # mm: the hose, and the pull from the mounts to the mount distance
 PULLED_TAUT = "pulled nearly taut"
@@ -47,15 +47,6 @@ def page(browser, tmp_path):  # noqa: F811 (the browser fixture imported above)
         assert errors == []
 
 
-def answered(page, action) -> dict:
-    """Do `action`, then wait until the page has the state answering the last change it sent; that state."""
-    seq = page.evaluate("() => window.studio.seq")
-    action()
-    page.wait_for_function(f"() => window.studio.seq > {seq} && window.studio.state.seq === window.studio.seq",
-                           timeout=20000)
-    return page.evaluate("() => window.studio.state")
-
-
 def take_end_arrow(page):
     """Put the Move gizmo on the end fitting and the mouse on its Z arrow, pressed; the point and pixels per mm."""
     page.click('[data-select="end"]')
@@ -74,7 +65,7 @@ def pull(page, grip, pulls_mm) -> dict:
     answer, as a slow hand drags; the last state."""
     (x, y), (dx, dy) = grip
     for mm in pulls_mm:
-        state = answered(page, lambda: page.mouse.move(x + mm * dx, y + mm * dy))
+        state = drawn_after(page, lambda: page.mouse.move(x + mm * dx, y + mm * dy))
     return state
 
 
@@ -126,7 +117,7 @@ def type_into(page, box, text: str) -> None:
 
 def test_a_refused_length_does_not_stay_in_its_box(page):
     box = page.locator('.slider[data-key="length"] input[type="number"]')
-    state = answered(page, lambda: type_into(page, box, "100"))
+    state = drawn_after(page, lambda: type_into(page, box, "100"))
     assert state["hose"]["length"] == LENGTH  # refused: the hose keeps its length
     assert TOO_SHORT in page.locator("#messages li.error").first.inner_text()
     page.wait_for_function("(box) => box.value === '185'", arg=box.element_handle())  # the box shows it again
@@ -135,7 +126,7 @@ def test_a_refused_length_does_not_stay_in_its_box(page):
 
 def test_a_refused_segment_count_does_not_stay_in_its_box(page):
     box = page.locator("#segments")
-    state = answered(page, lambda: type_into(page, box, "3"))
+    state = drawn_after(page, lambda: type_into(page, box, "3"))
     assert state["hose"]["segments"] == 30
     assert "hose.segments" in page.locator("#messages li.error").first.inner_text()
     page.wait_for_function("(box) => box.value === '30'", arg=box.element_handle())
@@ -165,7 +156,7 @@ def test_a_box_without_a_finite_number_says_so(page, text):
 
 def test_the_bending_stiffness_box_shows_its_whole_value(page):
     box = page.locator('.slider[data-key="bending_stiffness"] input[type="number"]')
-    state = answered(page, lambda: type_into(page, box, "149563.02563205"))  # the thesis hose's EI, N*mm^2
+    state = drawn_after(page, lambda: type_into(page, box, "149563.02563205"))  # the thesis hose's EI, N*mm^2
     assert state["hose"]["bending_stiffness"] == 149563.02563205
     page.locator("#segments").click()  # away from the box
     assert box.input_value() == "149563.025632"

@@ -19,9 +19,6 @@ import numpy as np
 from hoseline.mechanics.contact_newton import ContactModel
 from hoseline.model.problem import Problem
 
-PIECES = ("hose", "start fitting", "end fitting")
-
-
 @dataclass(frozen=True)
 class NearestGap:
     """The smallest gap (mm, surface to surface; negative where a fitting enters the obstacle) of one piece of the
