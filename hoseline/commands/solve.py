@@ -63,7 +63,7 @@ def solve_command(
         compile_solver(quiet, problem)
         with progress_bar(quiet) as progress:
             if wanted is None:
-                result = solve(problem, progress=progress)
+                result = solve(problem, progress=progress, force_accuracy=problem.force_accuracy)
             else:
                 result = solve_to_accuracy(problem, wanted, progress=progress)
         band = None if largest_twist is None else twisted_band(problem, largest_twist, friction_threshold)
@@ -173,7 +173,8 @@ def _where(contact) -> str:
 def print_contacts(result) -> None:
     """One line per obstacle of a placement with contact: the total force (N), the length the hose lies on and its
     distributed force, the point forces (N) at the touch-downs and point contacts (arc length, mm), the smallest gap;
-    then one per obstacle brought in after the free placement: how far (mm), the side the hose went to, and why."""
+    then the segment refinement for the forces' accuracy, if asked; then one per obstacle brought in after the free
+    placement: how far (mm), the side the hose went to, and why."""
     for contact in result.contacts:
         what = "itself" if contact.name == "self" else f"{contact.name!r} ({contact.kind})"
         lying = [f"{arc.length:.1f} mm lying (s = {arc.start:.1f} to {arc.end:.1f} mm, "
@@ -182,6 +183,12 @@ def print_contacts(result) -> None:
         carried = "; ".join(lying + ([f"point force(s) {', '.join(points)}"] if points else [])) or "not touching"
         Console().print(f"contact with {what}: force {float(np.linalg.norm(contact.total_force)):.4g} N, {carried}; "
                         f"smallest gap {contact.min_gap:.3g} mm{_where(contact)}", soft_wrap=True)
+    refinement = result.force_refinement
+    if refinement is not None:
+        estimate = "not estimated" if refinement.estimated is None else f"estimated {100 * refinement.estimated:.2g} %"
+        verdict = "" if refinement.met else f": not reached, {refinement.why}"
+        Console().print(f"forces and reactions to {100 * refinement.asked:g} % (\\[contact] force_accuracy_percent): "
+                        f"segments {' -> '.join(map(str, refinement.segments))}, {estimate}{verdict}", soft_wrap=True)
     for choice in result.obstacle_placement:
         if choice.rule != "clear":
             given_up = f", {choice.ways_failed} shorter way(s) given up" if choice.ways_failed else ""

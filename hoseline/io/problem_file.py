@@ -100,6 +100,9 @@ entering (frictionless), and the hose kept out of itself::
     self = true                      # optional, default false
     placement = "bring_in"           # optional: the obstacles brought in after the free placement (default),
                                      # or "along_path": present all along the published sequence
+    force_accuracy_percent = 0.5     # optional: `hoseline solve` refines the segments until each obstacle's
+                                     # total force and the mount reactions are estimated within it (default 0.5
+                                     # when [hose] gives no segments, else none: the count as given)
     [[contact.obstacles]]
     kind = "plane"                   # the hose stays on the side normal points to
     point = [0.0, 0.0, -40.0]        # mm
@@ -158,7 +161,7 @@ from hoseline.model.clips import Clip
 from hoseline.model.fittings import EndFittings, Fitting
 from hoseline.model.mounts import Mount
 from hoseline.model.obstacles import Box, Cylinder, Mesh, Obstacle, Plane, Sphere
-from hoseline.model.problem import Problem, reaches
+from hoseline.model.problem import DEFAULT_FORCE_ACCURACY, Problem, reaches
 from hoseline.model.preset import Preset
 from hoseline.model.stiffeners import PRESETS, SPRING_COUNTS, SpringTable, Stiffeners, thesis_preset
 
@@ -215,6 +218,7 @@ _UNITS = {
     "normal": "towards the side the hose stays on",
     "hose_side": "direction from the obstacle to the side the hose ends on",
     "contact.placement": "bring_in (obstacles after the free placement) or along_path",
+    "contact.force_accuracy_percent": "percent, e.g. 0.5",
     "center": "mm",
     "radius": "mm",
     "obstacles.start": "mm, one end of the axis",
@@ -626,6 +630,7 @@ class ContactSection(_Section):
 
     self_contact: bool = Field(False, alias="self")
     placement: str = "bring_in"
+    force_accuracy_percent: float | None = None
     obstacles: list[ContactObstacleSection] = Field(default_factory=list)
 
 
@@ -798,6 +803,7 @@ def problem_from_dict(data: dict, source: str = "<dict>", base_dir: str | Path |
             self_contact=spec.contact is not None and spec.contact.self_contact,
             contact_sides=() if spec.contact is None else tuple(table.hose_side for table in spec.contact.obstacles),
             contact_placement="bring_in" if spec.contact is None else spec.contact.placement,
+            force_accuracy=_force_accuracy(spec, stiffeners),
         )
         if problem.contact:  # a mount or clip inside an obstacle: no placement exists; said before any solve
             from hoseline.procedures.contact.bring_in import mounts_inside  # the contact model: only with contact
@@ -943,8 +949,20 @@ def _contact_dict(problem: Problem) -> dict[str, Any]:
             table = {"kind": "mesh", "file": obstacle.file}
         side = problem.side_of(obstacle.name)
         tables.append(table | {"name": obstacle.name} | ({} if side is None else {"hose_side": _floats(side)}))
-    return {"contact": {"self": bool(problem.self_contact), "placement": problem.contact_placement,
-                        "obstacles": tables}}
+    accuracy = {} if problem.force_accuracy is None else {"force_accuracy_percent": 100.0 * problem.force_accuracy}
+    return {"contact": {"self": bool(problem.self_contact), "placement": problem.contact_placement} | accuracy
+            | {"obstacles": tables}}
+
+
+def _force_accuracy(spec: ProblemFile, stiffeners) -> float | None:
+    """[contact] force_accuracy_percent as a fraction; by default DEFAULT_FORCE_ACCURACY for obstacles on a hose whose
+    file leaves the segment count to the solver (no hose.segments, no stiffener preset), else None."""
+    if spec.contact is None:
+        return None
+    if spec.contact.force_accuracy_percent is not None:
+        return spec.contact.force_accuracy_percent / 100.0
+    given = "segments" in spec.hose.model_fields_set or stiffeners is not None
+    return DEFAULT_FORCE_ACCURACY if spec.contact.obstacles and not given else None
 
 
 def _with_fittings_resolved(data: dict, source: str) -> tuple[dict, EndFittings | None]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -42,6 +44,10 @@ class Problem:
     contact_placement: "bring_in" (default: the published sequence without the obstacles, then each obstacle the
         free hose touches brought in from a clear position) or "along_path" (the sequence with the obstacles
         present all along; the straight start and the end fitting's path must clear them).
+    force_accuracy: with obstacles, the relative accuracy (a fraction, e.g. 0.005) of each obstacle's total force and
+        the mounts' reactions that `hoseline solve` refines the segments for (procedures/placement/force_accuracy.py);
+        None: the segment count as given.  A problem file sets DEFAULT_FORCE_ACCURACY when it gives obstacles and no
+        hose.segments.
     """
 
     hose: Hose
@@ -56,6 +62,7 @@ class Problem:
     self_contact: bool = False
     contact_sides: tuple[np.ndarray | None, ...] = ()
     contact_placement: str = "bring_in"
+    force_accuracy: float | None = None
 
     def __post_init__(self) -> None:
         g = np.asarray(self.gravity, dtype=float).reshape(-1)
@@ -98,6 +105,12 @@ class Problem:
         if self.contact_placement not in CONTACT_PLACEMENTS:
             raise ValueError(f"contact.placement = {self.contact_placement!r}: must be one of "
                              f"{', '.join(repr(name) for name in CONTACT_PLACEMENTS)}")
+        if self.force_accuracy is not None and not (math.isfinite(self.force_accuracy) and 0.0 < self.force_accuracy < 1.0):
+            raise ValueError(f"contact.force_accuracy_percent = {100 * self.force_accuracy!r}: give a percentage between "
+                             "0 and 100 (e.g. 0.5)")
+        if self.force_accuracy is not None and not self.contact:
+            raise ValueError("contact.force_accuracy_percent without obstacles: it refines the obstacles' forces; "
+                             "remove it or add [[contact.obstacles]]")
         if not self.has_contact:
             return
         if self.hose.stiffeners is not None:
@@ -165,6 +178,7 @@ class Problem:
 
 
 CONTACT_PLACEMENTS = ("bring_in", "along_path")
+DEFAULT_FORCE_ACCURACY = 0.005  # relative: forces and reactions of a contact problem whose file gives no hose.segments
 
 
 def _side(side, obstacle: Obstacle) -> np.ndarray:

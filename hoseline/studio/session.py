@@ -88,7 +88,10 @@ class Session:
         this one's; a sweep's motion is dropped); place it.
 
         Raises PlacementError when it cannot be placed (the session stays as it was).
+        The studio shows the hose at its segment count: a file's force accuracy (which `hoseline solve` refines the
+        segments for) is dropped, so that a saved file solves to the shape shown.
         """
+        problem = replace(problem, force_accuracy=None)
         self._adopt(problem, solve(problem))
         self.sweep, self.pose_index = None, None
         kept = [shown for shown in self.obstacles if shown.obstacle.source != CONTACT_SOURCE]

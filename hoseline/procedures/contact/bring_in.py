@@ -139,15 +139,16 @@ def reach_along(obstacle: Obstacle, direction: np.ndarray) -> float:
     return float(np.max(obstacle.triangles()[0] @ direction))  # a box or a mesh: its corners
 
 
-def entry_travel(alone: ContactModel, obstacle: Obstacle, pieces: Sequence[np.ndarray], side: np.ndarray) -> float:
+def entry_travel(alone: ContactModel, obstacle: Obstacle, pieces: Sequence[np.ndarray], side: np.ndarray,
+                 clearance: float | None = None) -> float:
     """How far (mm) `obstacle` must be moved back against `side` to clear every polyline of `pieces` (mm) by
-    START_CLEARANCE hose radii, coming in from beyond the slab where it clears them all; -inf if it clears them
-    where it is.  alone: the contact model of this obstacle only (no self-contact).
+    `clearance` (mm; None: START_CLEARANCE hose radii), coming in from beyond the slab where it clears them all; -inf
+    if it clears them where it is.  alone: the contact model of this obstacle only (no self-contact).
 
     The obstacle moved back by s is the hose moved on by s: the hose is traced from the far slab towards its
     place by the smallest gap (sphere tracing: no step crosses the obstacle) until it touches."""
     radius = alone.hose_radius
-    clearance = START_CLEARANCE * radius
+    clearance = START_CLEARANCE * radius if clearance is None else clearance
     if isinstance(obstacle, Plane):  # the half-space behind the plane: only its normal brings it in
         depth = max(float(np.max((obstacle.point - piece) @ obstacle.normal)) for piece in pieces) + radius
         return depth + clearance if depth > -clearance else -math.inf
@@ -193,18 +194,19 @@ class _Entry:
 
 
 def choose_entry(alone: ContactModel, obstacle: Obstacle, nodes: np.ndarray, held: Sequence[np.ndarray],
-                 sides: np.ndarray, avoid: Sequence[np.ndarray] = ()) -> _Entry | None:
-    """The side (of `sides`) along which `obstacle` comes in the shortest way to clear the hose `nodes` (mm) while
-    its way misses every held piece, leaving out the sides within 45 degrees of those in `avoid` (ways that failed);
-    None if there is none."""
+                 sides: np.ndarray, avoid: Sequence[np.ndarray] = (), clearance: float | None = None) -> _Entry | None:
+    """The side (of `sides`) along which `obstacle` comes in the shortest way to clear the hose `nodes` (mm) by
+    `clearance` (as entry_travel) while its way misses every held piece, leaving out the sides within 45 degrees of
+    those in `avoid` (ways that failed); None if there is none."""
+    clearance = START_CLEARANCE * alone.hose_radius if clearance is None else clearance
     best = None
     ordered = sides[np.argsort(-(sides @ _likely_side(obstacle, nodes, alone.hose_radius)), kind="stable")]
     for side in ordered:
         if any(side @ other >= HINT_COSINE for other in avoid):
             continue
-        if best is not None and _gap(alone, nodes + best.travel * side) < 0.5 * START_CLEARANCE * alone.hose_radius:
+        if best is not None and _gap(alone, nodes + best.travel * side) < 0.5 * clearance:
             continue  # it still touches the hose as far back as the best way starts: this way is no shorter
-        travel = entry_travel(alone, obstacle, [nodes], side)
+        travel = entry_travel(alone, obstacle, [nodes], side, clearance)
         if best is not None and travel >= best.travel:
             continue
         if _passes_through(alone, obstacle, held, side, travel):
@@ -264,6 +266,7 @@ def bring_in(
     control: StepControl = StepControl(),
     log: ContinuationLog | None = None,
     progress: Progress | None = None,
+    clearance: float | None = None,
 ) -> tuple[RodState, list[BroughtIn], float]:
     """(equilibrium, how each obstacle came in, its residual): the equilibrium under `clamps` with every obstacle of
     `model` in its place, from the free equilibrium `state` (which may pass through them; it clears itself with
@@ -272,7 +275,9 @@ def bring_in(
     obstacles: the problem's (model.names in order).  sides: per obstacle, the side the hose is to end on (a world
     direction) or None (least penetration).  Raises PlacementError naming the obstacle when a held part of the hose
     (an end fitting's or a clip's station) is inside it, when every way in passes through a held part, or when its
-    continuation cannot go on (saying where the hose is pressed hardest)."""
+    continuation cannot go on (saying where the hose is pressed hardest).
+    clearance: mm, how far each obstacle clears the hose where it starts coming in (None: START_CLEARANCE hose
+    radii; the force refinement's hose, which enters by a fraction of a millimetre, starts nearer)."""
     h = props.segment_length
     present: list[int] = []
     choices: list[BroughtIn] = []
@@ -293,7 +298,7 @@ def bring_in(
             sides_of = np.vstack([hint, sides_of[sides_of @ hint >= HINT_COSINE]])
         failed: list[tuple[np.ndarray, str]] = []  # (side, why) of ways in that the hose could not be pushed along
         while len(failed) < MOST_WAYS:
-            entry = choose_entry(alone, obstacle, nodes, held, sides_of, [side for side, _ in failed])
+            entry = choose_entry(alone, obstacle, nodes, held, sides_of, [side for side, _ in failed], clearance)
             if entry is None:
                 break
             try:

@@ -185,11 +185,14 @@ def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: R
     return float(values[0]) / props.segment_length
 
 
-def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> Result:
+def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel,
+                 stability: bool = True) -> Result:
     """The Result of a placement with contact completed: contacts per obstacle, the internal force (and the start
     mount's reaction) with the contact loads, the stability margin with the barrier, each obstacle's smallest gap
     to the whole assembly and where it is (contact/nearest.py).  Raises PlacementError if the hose enters anything
-    (a smallest gap below zero): the solver's guarantee failed."""
+    (a smallest gap below zero): the solver's guarantee failed.
+    stability: False leaves the rod's margin without the barrier in place (a dense eigenvalue problem saved), for a
+    result whose forces only are read (the error estimates' other solves)."""
     problem = result.problem
     result.contacts, beyond = contact_reports(problem, props, clamps, state, model)
     gaps = [contact.min_gap for contact in result.contacts]
@@ -205,5 +208,6 @@ def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: Ro
                        for contact in result.contacts]
     result.internal_force = result.internal_force + beyond
     result.start_force = -result.internal_force[0]
-    result.stability_margin = stability_margin_with_contact(props, clamps, state, model)
+    if stability:
+        result.stability_margin = stability_margin_with_contact(props, clamps, state, model)
     return result

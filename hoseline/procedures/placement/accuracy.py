@@ -133,10 +133,13 @@ def snapshot(result) -> ContactSnapshot:
                            {contact.name: contact.total_force for contact in result.contacts})
 
 
-def contact_errors(fine: ContactSnapshot, coarse: ContactSnapshot, narrowed: ContactSnapshot) -> ContactErrors:
+def contact_errors(fine: ContactSnapshot, coarse: ContactSnapshot, narrowed: ContactSnapshot,
+                   order: float = CONTACT_ORDER) -> ContactErrors:
     """The ContactErrors of the equilibrium `fine` from `coarse`, the same problem placed with fewer segments, and
-    `narrowed`, the fine equilibrium solved again with the barrier's reach d_hat times BARRIER_NARROWING."""
-    segments = ((len(fine.s) - 1) / (len(coarse.s) - 1)) ** CONTACT_ORDER - 1.0
+    `narrowed`, the fine equilibrium solved again with the barrier's reach d_hat times BARRIER_NARROWING.
+
+    order: of the error in the segment length (CONTACT_ORDER unless observed on three counts)."""
+    segments = ((len(fine.s) - 1) / (len(coarse.s) - 1)) ** order - 1.0
     barrier = 1.0 / (1.0 - BARRIER_NARROWING)  # the error at d_hat from the change to BARRIER_NARROWING d_hat
 
     def error(fine_value, coarse_value, narrowed_value):

@@ -224,6 +224,8 @@ class Result:
         problem.contact) and one named "self" with self-contact; empty without.
     obstacle_placement: with obstacles brought in after the free placement (contact_placement "bring_in"), how
         each came to its place (procedures/contact/bring_in.BroughtIn: the rule, the side, the travel); empty else.
+    force_refinement: with a force accuracy asked for (solve's force_accuracy), how the segments were refined for it
+        (procedures/placement/force_accuracy.ForceRefinement); None else.
     events: human-readable log of what happened along the continuation (bifurcations, branch switches).
     residual: final relative residual of the force and moment balance.
     """
@@ -266,6 +268,7 @@ class Result:
     clips: list[ClipReaction] = field(default_factory=list)
     contacts: list[ObstacleContact] = field(default_factory=list)
     obstacle_placement: list = field(default_factory=list)
+    force_refinement: object | None = None
 
     @property
     def stable(self) -> bool:
@@ -286,6 +289,8 @@ class Result:
             clips["contact"] = {"min_gap_mm": float(min(gaps)) if gaps else None,
                                 "obstacles": [contact.summary() for contact in self.contacts],
                                 "placement": [choice.summary() for choice in self.obstacle_placement]}
+            if self.force_refinement is not None:
+                clips["contact"]["force_accuracy"] = self.force_refinement.summary()
         clips |= fittings_summary(self.problem)
         orientation = orientation_angle_deg(self.problem, self.start_frame, self.end_frame)
         if orientation is not None:

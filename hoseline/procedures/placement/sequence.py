@@ -106,6 +106,7 @@ def solve(
     control: StepControl = StepControl(),
     estimate_error: bool = True,
     check_uniqueness: bool = True,
+    force_accuracy: float | None = None,
 ) -> Result:
     """Place the hose of `problem` and return its stable equilibrium.
 
@@ -116,6 +117,10 @@ def solve(
     checked", result.unchecked says so), for a caller that reads the shape only (a study's sweep samples).
     Raises PlacementError with the phase, fraction and residual when the path cannot be followed; ValueError for
     alternatives without check_uniqueness.
+    force_accuracy: with obstacles, a relative accuracy (e.g. 0.005) of each obstacle's total force and the mounts'
+    reactions: the placed hose is then carried to twice its segments, and again, until the estimated error is
+    within it (force_accuracy.py; result.force_refinement says how far it got); the shape, forces and error estimate
+    returned are the finest, the uniqueness verdict and the alternatives the placement's.
     """
     if alternatives and not check_uniqueness:
         raise ValueError("solve: alternatives need check_uniqueness=True (the other equilibria are what it finds)")
@@ -156,7 +161,9 @@ def solve(
                 with_contact(other_result, props, other.clamps, other.state, sequence.contact)
                 for other_result, other in zip(result.alternatives, others)
             ]
-    if estimate_error and sequence.contact is not None:  # accuracy.contact_errors: half the segments, half d_hat
+    if force_accuracy is not None and problem.contact:
+        result = _refined_for_forces(sequence, result, final, state, force_accuracy, log, started)
+    elif estimate_error and sequence.contact is not None:  # accuracy.contact_errors: half the segments, half d_hat
         from hoseline.mechanics.contact_newton import solve_with_contact
         from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
         from hoseline.procedures.placement.accuracy import BARRIER_NARROWING, contact_errors, snapshot
@@ -179,7 +186,7 @@ def solve(
         else:
             narrowed_result = with_contact(
                 build_result(problem, props, final, narrowed, lock_angle_deg, log, started, residual), props, final,
-                narrowed, narrowed_model)
+                narrowed, narrowed_model, stability=False)
             errors = contact_errors(snapshot(result), snapshot(coarse), snapshot(narrowed_result))
             result.discretisation_error = errors.station
             result.events.append(errors.describe())
@@ -198,6 +205,86 @@ def solve(
                                            richardson_error(props, coarse, coarse_final, state, control.tolerance, final))
     result.wall_time = time.perf_counter() - started
     return result
+
+
+def _refined_for_forces(sequence: "_Sequence", placed: Result, final: Clamps, state: RodState, accuracy: float,
+                        log: ContinuationLog, started: float) -> Result:
+    """The placed result carried to twice its segments, and again, until the estimated relative error of the obstacles'
+    forces and the mounts' reactions is within `accuracy` (force_accuracy.py); its uniqueness verdict, alternatives
+    and obstacle sides are the placement's, its events the placement's and the refinement's."""
+    from hoseline.mechanics.contact_newton import solve_with_contact
+    from hoseline.procedures.contact.bring_in import bring_in
+    from hoseline.procedures.contact.continuation import CONTACT_TOLERANCE
+    from hoseline.procedures.contact.placement import (problem_contact_model, stability_margin_with_contact,
+                                                       with_contact)
+    from hoseline.procedures.placement.accuracy import BARRIER_NARROWING, contact_errors, snapshot
+    from hoseline.procedures.placement.force_accuracy import (DOUBLINGS, ENTRY_CLEARANCE, FORCE_MARGIN, ForceRefinement,
+                                                              observed_order, prolonged, relative_error)
+
+    problem, control = sequence.problem, sequence.control
+    counts, notes, shots = [int(problem.hose.segments)], [], [snapshot(placed)]
+    finest, estimated, finest_parts = placed, None, None
+
+    def ended(met: bool, why: str = "") -> Result:
+        if finest_parts is not None:  # the barrier's stability margin of the result returned only (a dense eigenproblem)
+            finest.stability_margin = stability_margin_with_contact(*finest_parts)
+        finest.force_refinement = ForceRefinement(accuracy, tuple(counts), estimated, met, why)
+        if not met:
+            finest.events.append(f"force accuracy {100 * accuracy:g} % not reached: {why}")
+        return finest
+
+    if not any(np.any(contact.total_force) for contact in placed.contacts if contact.name != "self"):
+        placed.events.append("force accuracy: no obstacle touches the hose, so the segments stay as placed")
+        return placed
+    if any(clip.slides for clip in problem.clips):
+        return ended(False, "a sliding clip's station is not carried to a finer hose")
+    if sequence.brought_in is not None:
+        sides = [choice.hose_side for choice in sequence.brought_in]
+    else:
+        sides = list(problem.contact_sides) or [None] * len(problem.contact)
+    weight = problem.hose.mass_per_length * float(np.linalg.norm(problem.gravity)) * 1e-3 * problem.hose.length  # N
+    clamps, current = final, state
+    for _ in range(DOUBLINGS):
+        fine_problem = replace(problem, hose=replace(problem.hose, segments=2 * counts[-1]))
+        props = rod_properties(fine_problem)
+        clamps, start = prolonged(clamps, current)
+        model = problem_contact_model(fine_problem)
+        try:
+            current, _, residual = bring_in(problem.contact, sides, props, clamps, start, model, control=control,
+                                            clearance=ENTRY_CLEARANCE * model.activation)
+        except PlacementError as error:
+            return ended(False, f"the hose of {props.segments} segments could not be brought to the obstacles again "
+                                f"({error})")
+        narrowed_model = model.with_activation(BARRIER_NARROWING * model.activation)
+        narrowed, report = solve_with_contact(props, clamps, current, narrowed_model,
+                                              tolerance=max(control.tolerance, CONTACT_TOLERANCE))
+        if not report.converged:
+            return ended(False, f"the equilibrium of {props.segments} segments with half the barrier's reach did not "
+                                "converge (its error is not estimated)")
+        fine = with_contact(build_result(fine_problem, props, clamps, current, placed.lock_angle_deg, log, started,
+                                         residual), props, clamps, current, model, stability=False)
+        narrowed_shot = snapshot(with_contact(build_result(fine_problem, props, clamps, narrowed, placed.lock_angle_deg,
+                                                           log, started, report.residual), props, clamps, narrowed,
+                                              narrowed_model, stability=False))
+        shots.append(snapshot(fine))
+        if len(shots) < 3:  # two counts: order 1, the contact estimate's
+            errors = contact_errors(shots[-1], shots[-2], narrowed_shot)
+            estimated = relative_error(errors, shots[-1], weight)
+        else:
+            errors = contact_errors(shots[-1], shots[-2], narrowed_shot, observed_order(*shots[-3:]))
+            estimated = FORCE_MARGIN * relative_error(errors, shots[-1], weight)
+        counts.append(props.segments)
+        fine.discretisation_error = errors.station
+        for name in ("unique", "unchecked", "other_equilibria", "path_forks", "alternatives", "obstacle_placement"):
+            setattr(fine, name, getattr(placed, name))
+        notes.append(f"force accuracy: {props.segments} segments, estimated relative error of the forces and "
+                     f"reactions {100 * estimated:.3g} % ({100 * accuracy:g} % asked); {errors.describe()}")
+        fine.events = placed.events + notes
+        finest, finest_parts = fine, (props, clamps, current, model)
+        if estimated <= accuracy:
+            return ended(True)
+    return ended(False, f"{DOUBLINGS} doublings of the segments (the default's cost limit); give hose.segments, or "
+                        "--accuracy, for more")
 
 
 class _Sequence:
