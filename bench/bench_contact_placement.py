@@ -4,7 +4,8 @@ Cases (tests/test_contact_placement.py): a weightless hose (335 mm, 50 segments)
 through a drum (cylinder of radius 30 mm), placed without contact, with the drum (brought in after the free
 placement), with the drum and self-contact on, and with the drum present along the whole path (placement =
 "along_path"); the heavy hose of hoseline/demos/floor.py placed onto the floor its fittings point at (symmetric and
-asymmetric), against the same hose without the floor; and a planar loop closing on itself (1000 mm between coaxial mounts 150 mm apart, self-contact,
+asymmetric), against the same hose without the floor, and with the forces refined to 0.5 % (the default of a file
+without hose.segments, force_accuracy.py; the error estimate included); and a planar loop closing on itself (1000 mm between coaxial mounts 150 mm apart, self-contact,
 50 segments; once); and the plectoneme (tests/test_contact_selfloop.py, tests/test_contact_fold.py): 200 mm
 between coaxial mounts 100 mm apart twisted 720 and 1080 deg, which snaps (the contact Newton's downhill mode) at its
 folds and losses of stability (median of 5).  Each case also gives its failed path tries (Newton tries of the contact
@@ -32,6 +33,7 @@ import trimesh
 
 from contact_breakdown import breakdown, failed_tries
 from hoseline.demos.floor import ASYMMETRIC, SYMMETRIC, floor_data
+from hoseline.model.problem import DEFAULT_FORCE_ACCURACY
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import problem_from_dict
 from hoseline.mechanics.contact_mesh import _packed_meshes
@@ -197,6 +199,17 @@ def main() -> None:
         failed = failed_tries(lambda: solve(problem, estimate_error=False)) if problem.contact else 0
         print(f"{label:24s} median {1e3 * np.median(times):8.1f} ms  {result.iterations:5d} Newton iterations  "
               f"{result.steps:4d} steps, {failed} failed")
+    for label, layout in (("symmetric", SYMMETRIC), ("asymmetric", ASYMMETRIC)):  # the default of a file without segments
+        problem = problem_from_dict(floor_data(*layout))
+        times = []
+        for _ in range(5):
+            started = time.perf_counter()
+            result = solve(problem, force_accuracy=DEFAULT_FORCE_ACCURACY)
+            times.append(time.perf_counter() - started)
+        refinement = result.force_refinement
+        print(f"{f'floor ({label}), 0.5 %':24s} median {1e3 * np.median(times):8.1f} ms  segments "
+              f"{' -> '.join(map(str, refinement.segments))}, estimated {100 * refinement.estimated:.2g} % (with the "
+              "error estimate: the default of hoseline solve on a file without hose.segments)")
     if "--loop" in sys.argv:
         started = time.perf_counter()
         result = solve(problem_from_dict(LOOP), estimate_error=False)
