@@ -20,6 +20,7 @@ import io
 import json
 import shutil
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -320,10 +321,11 @@ def write_study_data(outcome: StudyOutcome, folder: Path, base_path: Path) -> No
 
 def _write_hose(problem, study, folder: Path, kind: str, quantity_name: str, header: str, base_path: Path) -> None:
     """KIND/QUANTITY/problem.toml (and sweep.toml for a sweep study) in `folder`: the hose `problem` with a header
-    comment saying what it is."""
+    comment saying what it is.  Without a force accuracy: the study solved the hose at its segment count, and the
+    file is to give what the study found."""
     target = folder / kind / quantity_name.replace(":", "_")
     target.mkdir(parents=True, exist_ok=True)
-    write_text(target / "problem.toml", header + problem_to_toml(problem))
+    write_text(target / "problem.toml", header + problem_to_toml(replace(problem, force_accuracy=None)))
     if study.base.sweep is not None:
         write_text(target / "sweep.toml", header + sweep_toml(problem, base_path))
 
