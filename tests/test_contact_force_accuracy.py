@@ -5,13 +5,13 @@ solutions of the floor (tests/floor_free_boundary.py, tests/elastica_floor_shoot
 
 import json
 import math
+import tomllib
 
 import numpy as np
 import pytest
 
-from floor_free_boundary import solve_resting_elastica
 from hoseline.cli import app
-from hoseline.demos.floor import ASYMMETRIC, LENGTH, RADIUS, STIFFNESS, SYMMETRIC, WEIGHT, floor_data
+from hoseline.demos.floor import ASYMMETRIC, LENGTH, SYMMETRIC, WEIGHT, floor_data
 from hoseline.io.problem_file import ProblemFileError, problem_from_dict, problem_to_toml
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.mechanics.rotations import rotation_matrix
@@ -99,7 +99,6 @@ def test_the_problem_file_sets_the_default_only_where_it_leaves_the_segments_to_
     data["contact"]["force_accuracy_percent"] = 0.2
     problem = problem_from_dict(data)
     assert problem.force_accuracy == pytest.approx(0.002)
-    import tomllib
     assert problem_from_dict(tomllib.loads(problem_to_toml(problem))).force_accuracy == pytest.approx(0.002)
     no_obstacles = {key: value for key, value in data.items() if key != "contact"}
     assert problem_from_dict(no_obstacles).force_accuracy is None
