@@ -202,6 +202,8 @@ def study_document(outcome: StudyOutcome) -> dict:
         "tolerances": [{"parameter": t.parameter, "shared_with": list(t.shared_with), "distribution": t.distribution,
                         "size": list(t.size), "axes": [list(row) for row in t.axes] or "world", "label": t.name}
                        for t in study.variation.tolerances],
+        "correlations": [{"tolerances": [study.variation.tolerances[k].name for k in c.tolerances],
+                          "matrix": [list(row) for row in c.matrix]} for c in study.variation.correlations],
         "nominal": dict(zip(names, outcome.nominal)),
         "quantities": {
             q.name: {"unit": q.unit, "mean": s.mean, "mean_ci95": list(s.mean_interval), "std": s.std,

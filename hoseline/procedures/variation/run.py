@@ -138,6 +138,10 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         outcome.notes.append("no worst-case corners: they follow the sensitivities, which this study has not")
     if sobol is not None and outcome.first_order is not None:
         outcome.notes.extend(_sobol_notes(outcome))
+    if sobol is not None and study.variation.correlations:
+        outcome.notes.append("the Sobol' indices of correlated tolerances are those of their independent normal scores "
+                             "in each correlation matrix's order (its Cholesky factor): the first tolerance of a "
+                             "matrix carries what the others share with it, a later one only its own part")
     outcome.notes.extend(note for event in outcome.rare_events for note in event.notes())
     outcome.run = {
         "where": where.describe(),
