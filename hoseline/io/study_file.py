@@ -90,6 +90,7 @@ from hoseline.io.measured_values import read_measured_values
 from hoseline.io.problem_file import ProblemFileError, _Section, _validated, load_problem, read_toml
 from hoseline.procedures.variation.correlation import Correlation
 from hoseline.procedures.variation.design_search import DesignGrid, default_rank_by
+from hoseline.procedures.variation.precision import Precision
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
 from hoseline.procedures.variation.rare import Reliability
 from hoseline.procedures.variation.samples import StudyBase
@@ -123,14 +124,24 @@ Pair = Annotated[list[float], AfterValidator(_pair)]
 Positive = Annotated[float, AfterValidator(_positive)]
 
 
+class PrecisionSection(_Section):
+    """[sampling.precision]: sample in rounds until a statistic's 95 % interval is this narrow."""
+
+    quantity: str
+    statistic: str = "mean"
+    half_width: float
+    max_samples: Annotated[int, Field(ge=1, le=MAX_SAMPLES)]
+
+
 class SamplingSection(_Section):
-    """[sampling]: method, samples, seed, batch."""
+    """[sampling]: method, samples, seed, batch, start, precision."""
 
     method: Literal["monte-carlo", "latin-hypercube", "sobol"] = "sobol"
     samples: Annotated[int, Field(ge=0, le=MAX_SAMPLES)] = 256
     seed: Annotated[int, Field(ge=0)] = 0
     batch: Annotated[int, Field(ge=1)] | None = None
     start: Literal["straight", "nominal"] = "straight"
+    precision: PrecisionSection | None = None
 
 
 class VarySection(_Section):
@@ -234,8 +245,9 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
                              "from the nominal hose does not carry sliding clips (the placement moves one to the "
                              "nearest station at its end); use start = \"straight\" (the published placement)")
     limits = _limits(spec.limits, base, str(path))
+    precision = _precision(spec.sampling, base, str(path)) if spec.sampling.precision and spec.vary else None
     sampling = Sampling(spec.sampling.method, spec.sampling.samples if spec.vary else 0, spec.sampling.seed,
-                        spec.sampling.batch, spec.sampling.start)
+                        spec.sampling.batch, spec.sampling.start, precision)
     if spec.vary and sampling.count == 0:
         raise StudyFileError(f"{path}: sampling.samples = 0 with [[vary]] tolerances: give at least 1 sample")
     design = _design(spec.design, base, limits, sampling, str(path)) if spec.design else None
@@ -381,6 +393,22 @@ def _correlated(variation: Variation, sections: list[CorrelationSection], vary: 
         except ValueError as exc:
             raise StudyFileError(f"{source}: correlation[{k}].{exc}") from None
     return correlated
+
+
+def _precision(section: SamplingSection, base: StudyBase, source: str) -> Precision:
+    """The Precision of [sampling.precision]: a quantity of the study, a cap at least the first round."""
+    given = section.precision
+    names = [q.name for q in quantities(base.obstacle_names)]
+    if given.quantity not in names:
+        raise StudyFileError(f"{source}: sampling.precision.quantity = \"{given.quantity}\": unknown; choose one of "
+                             f"{', '.join(names)}")
+    if given.max_samples < section.samples:
+        raise StudyFileError(f"{source}: sampling.precision.max_samples = {given.max_samples}: less than the first "
+                             f"round's sampling.samples = {section.samples}; give at least that many")
+    try:
+        return Precision(given.quantity, given.statistic, given.half_width, given.max_samples)
+    except ValueError as exc:
+        raise StudyFileError(f"{source}: sampling.precision.{exc}") from None
 
 
 def _measured_file(path: Path, item: VarySection, where: str) -> tuple[float, ...]:

@@ -198,7 +198,8 @@ def study_document(outcome: StudyOutcome) -> dict:
         "base": "sweep" if study.base.sweep is not None else "placement",
         "problem": problem_to_dict(study.base.problem),
         "sampling": {"method": study.sampling.method, "samples": study.sampling.count, "seed": study.sampling.seed,
-                     "batch": study.sampling.batch_size()},
+                     "batch": None if study.sampling.rounds else study.sampling.batch_size(), "rounds": [
+                         {"samples": size, "batch": study.sampling.round_batch(size)} for size in study.sampling.rounds]},
         "tolerances": [{"parameter": t.parameter, "shared_with": list(t.shared_with), "distribution": t.distribution,
                         "size": list(t.size), "axes": [list(row) for row in t.axes] or "world", "label": t.name}
                        for t in study.variation.tolerances],
@@ -224,6 +225,13 @@ def study_document(outcome: StudyOutcome) -> dict:
         "notes": outcome.notes,
         "run": outcome.run,
     }
+    if outcome.precision is not None:
+        reached = outcome.precision
+        document["precision"] = {
+            "quantity": reached.precision.quantity, "statistic": reached.precision.statistic,
+            "half_width_asked": reached.precision.half_width, "max_samples": reached.precision.max_samples,
+            "estimate": reached.estimate, "ci95": [reached.low, reached.high], "half_width": reached.half_width,
+            "samples": reached.samples, "rounds": list(reached.rounds), "reached": reached.reached}
     first = outcome.first_order
     if first is not None:
         document["first_order"] = {
