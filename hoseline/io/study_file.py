@@ -12,6 +12,10 @@
     seed = 1
     batch = 64                         # optional: samples per task
     start = "straight"                 # or "nominal": Newton from the nominal hose (placements; checked)
+    precision = { quantity = "bend_radius", statistic = "P5", half_width = 0.1, max_samples = 16384 }
+                                       # optional: rounds (samples the first) until the 95 % interval of the
+                                       #   statistic ("mean" or "P<p>") is within +-half_width (the quantity's
+                                       #   unit), or max_samples (then said so)
 
     [[vary]]                           # one per tolerance; several on one parameter add up
     parameter = "end.point"            # start.point, end.point: mm
@@ -45,6 +49,17 @@
     shared_with = ["end.point"]        #   (same kind and unit), e.g. the subframe both mounts sit on
     distribution = "normal"
     sigma = 0.5
+    [[vary]]
+    parameter = "hose.length"          # offsets and factors: measured values (at least 10, interpolated quantiles)
+    distribution = "empirical"         #   values = [...] (the parameter's unit, or factors; unit = "%" too), or
+    file = "lengths.csv"               #   file = a CSV relative to this file: one number per row, or a header and
+    column = "deviation_mm"            #   column = the one to use
+    label = "measured length"
+
+    [[correlation]]                    # optional: a Gaussian copula between tolerances of any kind, named by label
+    tolerances = ["measured length", "hose.bending_stiffness"]  # (or parameter of one [[vary]] alone); points
+    matrix = [[1.0, 0.6], [0.6, 1.0]]  #   and directions axis by axis; symmetric, unit diagonal, in [-1, 1],
+                                       #   positive definite
 
     [limits]                           # each optional
     bend_radius = 35.0                 # mm, at least (default: the hose's min_bend_radius)
