@@ -98,3 +98,14 @@ def _load(folder, extra: str):
     text = f'base = "problem.toml"\n[[vary]]\nparameter = "hose.length"\ndistribution = "empirical"\n{extra}'
     (folder / "study.toml").write_text(text, encoding="utf-8")
     return load_study(folder / "study.toml")[0]
+
+
+def test_changed_measurements_change_the_study_fingerprint(tmp_path):
+    """A resumed study must not reuse samples drawn from other measurements: the CSV file is not in the study or base
+    file's text, so its values enter the fingerprint."""
+    from hoseline.io.study_results import fingerprint
+
+    (tmp_path / "lengths.csv").write_text("\n".join(str(v) for v in MEASURED) + "\n", encoding="utf-8")
+    before = fingerprint("same text", "same base", _load(tmp_path, 'file = "lengths.csv"\n'))
+    (tmp_path / "lengths.csv").write_text("\n".join(str(v + 0.5) for v in MEASURED) + "\n", encoding="utf-8")
+    assert fingerprint("same text", "same base", _load(tmp_path, 'file = "lengths.csv"\n')) != before

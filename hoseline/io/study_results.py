@@ -37,10 +37,13 @@ SWEEP_TABLES = ("bodies", "obstacles", "sweep")
 
 
 def fingerprint(study_text: str, base_text: str, study: Study) -> str:
-    """A hash of everything the samples depend on: the study and base files and the obstacle meshes."""
+    """A hash of everything the samples depend on: the study and base files, the tolerances' sizes (measured values
+    read from a file among them) and the obstacle meshes."""
     digest = hashlib.sha256()
     for text in (study_text, base_text):
         digest.update(text.encode("utf-8"))
+    for tolerance in study.variation.tolerances:
+        digest.update(np.array(tolerance.size, dtype=float).tobytes())
     sweep = study.base.sweep
     for obstacle in () if sweep is None else sweep.obstacles:
         digest.update(np.ascontiguousarray(obstacle.vertices, dtype=float).tobytes())
