@@ -83,7 +83,7 @@ def test_the_cap_stops_the_rounds_and_says_so(tmp_path):
     _, samples, outcome, _ = _sample(study)
     assert not outcome.reached and outcome.samples == 3000 == len(samples["index"])
     assert outcome.half_width == pytest.approx(1.96 * SIGMA / math.sqrt(3000), rel=0.05)
-    assert "NOT the 0.01 asked, the cap of max_samples = 3000 stopped it" in outcome.describe("mm")
+    assert "NOT the 0.01 asked, the cap of max_samples = 3000 stopped it" in outcome.describe()
 
 
 def test_sobol_rounds_keep_a_power_of_two_and_continue_the_sequence():

@@ -421,7 +421,8 @@ def _precision(section: SamplingSection, base: StudyBase, source: str) -> Precis
         raise StudyFileError(f"{source}: sampling.precision.max_samples = {given.max_samples}: less than the first "
                              f"round's sampling.samples = {section.samples}; give at least that many")
     try:
-        return Precision(given.quantity, given.statistic, given.half_width, given.max_samples)
+        unit = next(q.unit for q in quantities(base.obstacle_names) if q.name == given.quantity)
+        return Precision(given.quantity, given.statistic, given.half_width, given.max_samples, unit)
     except ValueError as exc:
         raise StudyFileError(f"{source}: sampling.precision.{exc}") from None
 

@@ -231,7 +231,7 @@ def study_document(outcome: StudyOutcome) -> dict:
     if outcome.precision is not None:
         reached = outcome.precision
         document["precision"] = {
-            "quantity": reached.precision.quantity, "statistic": reached.precision.statistic,
+            "quantity": reached.precision.quantity, "unit": reached.precision.unit, "statistic": reached.precision.statistic,
             "half_width_asked": reached.precision.half_width, "max_samples": reached.precision.max_samples,
             "estimate": reached.estimate, "ci95": [reached.low, reached.high], "half_width": reached.half_width,
             "samples": reached.samples, "rounds": list(reached.rounds), "reached": reached.reached}

@@ -102,9 +102,8 @@ def _intro(outcome: StudyOutcome) -> str:
     text = (f"<p>{outcome.count} samples ({html.escape(study.sampling.method)}, seed {study.sampling.seed}) of "
             f"{kind} of a {hose.length:g} mm hose ({hose.segments} segments).</p>")
     if outcome.precision is not None:
-        unit = next(q.unit for q in study.quantities if q.name == outcome.precision.precision.quantity)
         status = "ok" if outcome.precision.reached else "bad"
-        text += (f'<p>Sampled to a precision: <span class="{status}">{html.escape(outcome.precision.describe(unit))}'
+        text += (f'<p>Sampled to a precision: <span class="{status}">{html.escape(outcome.precision.describe())}'
                  "</span>.</p>")
     correlations = "".join(
         f"<li>{html.escape(', '.join(study.variation.tolerances[k].name for k in c.tolerances))}: correlation matrix "

@@ -33,7 +33,8 @@ _PERCENTILE = re.compile(r"P(\d+(?:\.\d+)?)")
 @dataclass(frozen=True)
 class Precision:
     """What [sampling.precision] asks: quantity (a quantity's name), statistic ("mean" or "P<p>", p in (0, 100)),
-    half_width (> 0, the quantity's unit) of its 95 % interval, max_samples (the cap, >= the first round).
+    half_width (> 0, the quantity's unit) of its 95 % interval, max_samples (the cap, >= the first round), unit (the
+    quantity's, for reports).
 
     Raises ValueError naming statistic or half_width and the fix.
     """
@@ -42,6 +43,7 @@ class Precision:
     statistic: str
     half_width: float
     max_samples: int
+    unit: str = ""
 
     def __post_init__(self) -> None:
         if self.statistic != "mean":
@@ -84,9 +86,10 @@ class PrecisionOutcome:
         """Half the interval's width, the quantity's unit (inf while a percentile is not bounded)."""
         return (self.high - self.low) / 2.0
 
-    def describe(self, unit: str) -> str:
+    def describe(self) -> str:
         """One sentence for notes and reports."""
         p = self.precision
+        unit = p.unit
         said = (f"{p.statistic} of {p.quantity} = {self.estimate:.6g} {unit}, 95 % interval [{self.low:.6g}, "
                 f"{self.high:.6g}]: half width {self.half_width:.3g} {unit} after {self.samples} samples in "
                 f"{len(self.rounds)} round(s)")

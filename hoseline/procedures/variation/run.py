@@ -144,8 +144,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     outcome.worst_cases = corners or []
     outcome.precision = precision
     if precision is not None and not precision.reached:
-        unit = next(q.unit for q in study.quantities if q.name == precision.precision.quantity)
-        outcome.notes.append(f"sampling to a precision: {precision.describe(unit)}")
+        outcome.notes.append(f"sampling to a precision: {precision.describe()}")
     if study.worst_case and sensitivities is None:
         outcome.notes.append("no worst-case corners: they follow the sensitivities, which this study has not")
     if sobol is not None and outcome.first_order is not None:
