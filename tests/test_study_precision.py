@@ -30,16 +30,20 @@ class LengthEngine:
     def __init__(self) -> None:
         self.rounds: list[int] = []
 
-    def run(self, context, coordinates, batch_size, on_batch, done=()) -> None:
+    def run(self, context, coordinates, batch_size, on_batch, done=(), first=0) -> None:
+        if 0 in done:  # one batch per round
+            return
         self.rounds.append(len(coordinates))
         length = coordinates[:, INDEX["hose.length"]]
-        on_batch(0, {"index": np.arange(len(coordinates)), "values": np.repeat(length[:, None], context, axis=1)})
+        on_batch(0, {"index": first + np.arange(len(coordinates)),
+                     "values": np.repeat(length[:, None], context, axis=1)})
 
 
-def _sample(study):
-    """_sample_to_precision of `study` on the LengthEngine: (study, samples, outcome, the rounds' samples)."""
+def _sample(study, stores: dict[str, MemoryStore] | None = None):
+    """_sample_to_precision of `study` on the LengthEngine: (study, samples, outcome, the rounds' samples evaluated).
+    stores: the stages' stores by name (kept by the caller to resume)."""
     engine = LengthEngine()
-    stores: dict[str, MemoryStore] = {}
+    stores = {} if stores is None else stores
     found = _sample_to_precision(engine, len(study.quantities), study, lambda s: stores.setdefault(s, MemoryStore()),
                                  None)
     return (*found, engine.rounds)
@@ -84,6 +88,16 @@ def test_the_cap_stops_the_rounds_and_says_so(tmp_path):
     assert not outcome.reached and outcome.samples == 3000 == len(samples["index"])
     assert outcome.half_width == pytest.approx(1.96 * SIGMA / math.sqrt(3000), rel=0.05)
     assert "NOT the 0.01 asked, the cap of max_samples = 3000 stopped it" in outcome.describe()
+
+
+def test_an_interrupted_study_resumes_with_the_rounds_it_finished(tmp_path):
+    """Run again over the same stores, the rounds are found finished: nothing is evaluated, the outcome is the same."""
+    study = _study(tmp_path, "mean", 0.05, 100_000)
+    stores: dict[str, MemoryStore] = {}
+    _, samples, outcome, rounds = _sample(study, stores)
+    assert sorted(stores) == ["samples"] + [f"samples_{r}" for r in range(1, len(rounds))]
+    _, again, resumed, evaluated = _sample(study, stores)
+    assert evaluated == [] and resumed == outcome and np.array_equal(again["values"], samples["values"])
 
 
 def test_sobol_rounds_keep_a_power_of_two_and_continue_the_sequence():

@@ -173,8 +173,9 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
 
 
 def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.ndarray, batch_size: int,
-           stores: Callable[[str], BatchStore], progress: Progress | None) -> dict[str, np.ndarray] | None:
-    """Run one stage's batches (skipping those its store has) and return its merged samples (None if empty)."""
+           stores: Callable[[str], BatchStore], progress: Progress | None, first: int = 0) -> dict[str, np.ndarray] | None:
+    """Run one stage's batches (skipping those its store has) and return its merged samples (None if empty).
+    first: the index of its first sample (a later round of sampling to a precision)."""
     if len(coordinates) == 0:
         return None
     store = stores(name)
@@ -187,7 +188,7 @@ def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.nda
         if progress is not None:
             progress(name, len(batches) / total)
 
-    engine.run(context, coordinates, batch_size, keep, done=set(batches))
+    engine.run(context, coordinates, batch_size, keep, done=set(batches), first=first)
     return merge_batches(batches)
 
 
@@ -205,9 +206,7 @@ def _sample_to_precision(engine: Engine, context: StudyContext, study: Study, st
         study = replace(study, sampling=replace(study.sampling, count=sum(rounds), rounds=tuple(rounds)))
         first = sum(rounds[:-1])
         part = _stage(engine, "samples" if len(rounds) == 1 else f"samples_{len(rounds) - 1}", context,
-                      study.coordinates()[first:], study.sampling.round_batch(rounds[-1]), stores,
-                      progress)
-        part["index"] = part["index"] + first  # a round's stage numbers its samples from 0
+                      study.coordinates()[first:], study.sampling.round_batch(rounds[-1]), stores, progress, first)
         parts[len(rounds) - 1] = part
         samples = merge_batches(parts)
         estimate, low, high = precision.interval(samples["values"][:, column])
