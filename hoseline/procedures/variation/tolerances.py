@@ -25,7 +25,8 @@ alike; several tolerances on one parameter add up (a length tolerance and the ch
 pressure).  A tolerance shared with other parameters of its kind (`shared_with`: a shared
 contributor, e.g. the subframe both mounts sit on) adds the same deviation to each of them, so
 they move together: their deviations are correlated, and Variation.covariance has the cross
-terms.  Each also knows the mean and covariance of what it adds, for the first-order variance
+terms; tolerances of any kinds are correlated by a matrix over their normal scores (a Gaussian
+copula, correlation.py), applied by Variation.coordinates to the design's unit points.  Each also knows the mean and covariance of what it adds, for the first-order variance
 (sensitivity.py).
 """
 
