@@ -237,6 +237,13 @@ def test_a_rub_in_a_sweep_has_its_most_probable_failure_point_as_a_sweep_file(sw
     ("end_torque = 2500.0", "end_torque = 2500.0\n[sobol]\nrows = 4", "sobol.rows"),
     ('base = "problem.toml"', 'base = "problem.toml"\nworst_case = true\nsensitivities = false',
      "worst_case = true needs [[vary]] tolerances and sensitivities = true"),
+    ("end_torque = 2500.0", 'end_torque = 2500.0\n[[correlation]]\ntolerances = ["length change under pressure", '
+     '"hose.bending_stiffness"]\nmatrix = [[1.0, 1.2], [1.2, 1.0]]', "correlation[0].matrix[0][1] = 1.2: a correlation "
+     "lies in [-1, 1]"),
+    ('distribution = "uniform"\nrange = [-4.0, 2.0]', 'distribution = "empirical"\nvalues = [1.0, 2.0]',
+     "vary[1] (hose.length): hose.length: empirical needs at least 10 measured values"),
+    ("seed = 3", 'seed = 3\nprecision = {quantity = "bend_radius", half_width = 0.0, max_samples = 64}',
+     "sampling.precision.half_width = 0: must be a positive number"),
 ])
 def test_bad_study_files_are_refused_naming_the_field(tmp_path, old, new, message):
     """Exit code 2, one line naming the field and the fix, nothing written."""

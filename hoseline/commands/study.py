@@ -64,6 +64,8 @@ def study_command(
             Console().print(_rare_table(outcome))
         if outcome.worst_cases:
             Console().print(_worst_case_table(outcome))
+        if outcome.precision is not None and outcome.precision.reached:  # when not, a note says so
+            Console().print(f"sampled to a precision: {outcome.precision.describe()}", soft_wrap=True)
         for note in outcome.notes:
             Console().print(f"[yellow]note:[/] {note}", soft_wrap=True)
         if outcome.design is not None:

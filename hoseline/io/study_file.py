@@ -12,6 +12,10 @@
     seed = 1
     batch = 64                         # optional: samples per task
     start = "straight"                 # or "nominal": Newton from the nominal hose (placements; checked)
+    precision = { quantity = "bend_radius", statistic = "P5", half_width = 0.1, max_samples = 16384 }
+                                       # optional: rounds (samples the first) until the 95 % interval of the
+                                       #   statistic ("mean" or "P<p>") is within +-half_width (the quantity's
+                                       #   unit), or max_samples (then said so)
 
     [[vary]]                           # one per tolerance; several on one parameter add up
     parameter = "end.point"            # start.point, end.point: mm
@@ -45,6 +49,17 @@
     shared_with = ["end.point"]        #   (same kind and unit), e.g. the subframe both mounts sit on
     distribution = "normal"
     sigma = 0.5
+    [[vary]]
+    parameter = "hose.length"          # offsets and factors: measured values (at least 10, interpolated quantiles)
+    distribution = "empirical"         #   values = [...] (the parameter's unit, or factors; unit = "%" too), or
+    file = "lengths.csv"               #   file = a CSV relative to this file: one number per row, or a header and
+    column = "deviation_mm"            #   column = the one to use
+    label = "measured length"
+
+    [[correlation]]                    # optional: a Gaussian copula between tolerances of any kind, named by label
+    tolerances = ["measured length", "hose.bending_stiffness"]  # (or parameter of one [[vary]] alone); points
+    matrix = [[1.0, 0.6], [0.6, 1.0]]  #   and directions axis by axis; symmetric, unit diagonal, in [-1, 1],
+                                       #   positive definite
 
     [limits]                           # each optional
     bend_radius = 35.0                 # mm, at least (default: the hose's min_bend_radius)
@@ -79,14 +94,18 @@ Errors name the field, the value and the fix, as for problem files.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import AfterValidator, ConfigDict, Field, model_validator
 
+from hoseline.io.measured_values import read_measured_values
 from hoseline.io.problem_file import ProblemFileError, _Section, _validated, load_problem, read_toml
+from hoseline.procedures.variation.correlation import Correlation
 from hoseline.procedures.variation.design_search import DesignGrid, default_rank_by
+from hoseline.procedures.variation.precision import Precision
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
 from hoseline.procedures.variation.rare import Reliability
 from hoseline.procedures.variation.samples import StudyBase
@@ -96,7 +115,8 @@ from hoseline.procedures.variation.tolerances import (DISTRIBUTIONS, PARAMETERS,
 
 MAX_SAMPLES = 10_000_000  # beyond this the stored samples would not fit in memory
 MAX_CANDIDATES = 100_000
-SIZE_KEYS = ("sigma", "tolerance", "radius", "angle", "range", "factor", "mode", "mean")  # of [[vary]]
+SIZE_KEYS = ("sigma", "tolerance", "radius", "angle", "range", "factor", "mode", "mean", "values", "file",
+             "column")  # of [[vary]]
 
 
 class StudyFileError(ProblemFileError):
@@ -119,14 +139,24 @@ Pair = Annotated[list[float], AfterValidator(_pair)]
 Positive = Annotated[float, AfterValidator(_positive)]
 
 
+class PrecisionSection(_Section):
+    """[sampling.precision]: sample in rounds until a statistic's 95 % interval is this narrow."""
+
+    quantity: str
+    statistic: str = "mean"
+    half_width: float
+    max_samples: Annotated[int, Field(ge=1, le=MAX_SAMPLES)]
+
+
 class SamplingSection(_Section):
-    """[sampling]: method, samples, seed, batch."""
+    """[sampling]: method, samples, seed, batch, start, precision."""
 
     method: Literal["monte-carlo", "latin-hypercube", "sobol"] = "sobol"
     samples: Annotated[int, Field(ge=0, le=MAX_SAMPLES)] = 256
     seed: Annotated[int, Field(ge=0)] = 0
     batch: Annotated[int, Field(ge=1)] | None = None
     start: Literal["straight", "nominal"] = "straight"
+    precision: PrecisionSection | None = None
 
 
 class VarySection(_Section):
@@ -142,10 +172,20 @@ class VarySection(_Section):
     factor: float | None = None
     mode: float | None = None
     mean: float | None = None
+    values: list[float] | None = None
+    file: str | None = None
+    column: str | None = None
     unit: Literal["mm", "%"] = "mm"
     label: str = ""
     shared_with: list[str] = Field(default_factory=list)
     frame: Literal["world", "fitting"] = "world"
+
+
+class CorrelationSection(_Section):
+    """[[correlation]]: a correlation matrix between tolerances named by their label or parameter."""
+
+    tolerances: list[str]
+    matrix: list[list[float]]
 
 
 class DesignSection(_Section):
@@ -187,6 +227,7 @@ class StudyFile(_Section):
     worst_case: bool = False
     sampling: SamplingSection = Field(default_factory=SamplingSection)
     vary: list[VarySection] = Field(default_factory=list)
+    correlation: list[CorrelationSection] = Field(default_factory=list)
     limits: dict[str, float] = Field(default_factory=dict)
     design: DesignSection | None = None
     reliability: ReliabilitySection | None = None
@@ -210,15 +251,18 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
     spec = _validated(StudyFile, data, str(path), error=StudyFileError)
     base_path = path.parent / spec.base
     base, text = _base(base_path, str(path), spec.base)
-    variation = Variation(tuple(_tolerance(item, k, base, str(path)) for k, item in enumerate(spec.vary)),
-                          clips=len(base.problem.clips))
+    tolerances = tuple(_tolerance(item, k, base, path) for k, item in enumerate(spec.vary))
+    variation = Variation(tolerances, clips=len(base.problem.clips))
+    if spec.correlation:
+        variation = _correlated(variation, spec.correlation, spec.vary, str(path))
     if any(clip.kind == "sliding" for clip in base.problem.clips) and spec.sampling.start == "nominal":
         raise StudyFileError(f"{path}: sampling.start = \"nominal\" with a sliding clip in the base: the warm start "
                              "from the nominal hose does not carry sliding clips (the placement moves one to the "
                              "nearest station at its end); use start = \"straight\" (the published placement)")
     limits = _limits(spec.limits, base, str(path))
+    precision = _precision(spec.sampling, base, str(path)) if spec.sampling.precision and spec.vary else None
     sampling = Sampling(spec.sampling.method, spec.sampling.samples if spec.vary else 0, spec.sampling.seed,
-                        spec.sampling.batch, spec.sampling.start)
+                        spec.sampling.batch, spec.sampling.start, precision)
     if spec.vary and sampling.count == 0:
         raise StudyFileError(f"{path}: sampling.samples = 0 with [[vary]] tolerances: give at least 1 sample")
     design = _design(spec.design, base, limits, sampling, str(path)) if spec.design else None
@@ -258,8 +302,8 @@ def _scalar(value, name: str) -> float:
     return float(value)
 
 
-def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Tolerance:
-    """The Tolerance of one [[vary]] entry."""
+def _tolerance(item: VarySection, k: int, base: StudyBase, source: Path) -> Tolerance:
+    """The Tolerance of one [[vary]] entry (source: the study file; a file of measured values is relative to it)."""
     where = f"{source}: vary[{k}] ({item.parameter})"
     try:
         kind = parameter_kind(item.parameter)[0]
@@ -286,8 +330,9 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
                              f"{', '.join(DISTRIBUTIONS[kind])}")
     needed = {"normal": ("sigma",), "uniform": ("tolerance",) if kind == "point" else ("range",), "sphere": ("radius",),
               "cone": ("angle",), "lognormal": ("factor",), "loguniform": ("factor",), "triangular": ("range", "mode"),
-              "truncnormal": ("sigma", "range")}[item.distribution]
-    optional = ("mean",) if item.distribution == "truncnormal" else ()
+              "truncnormal": ("sigma", "range"), "empirical": ("file",) if item.file is not None else ("values",)
+              }[item.distribution]
+    optional = {"truncnormal": ("mean",), "empirical": ("column",) if item.file is not None else ()}.get(item.distribution, ())
     given = [key for key in SIZE_KEYS if getattr(item, key) is not None]
     missing = [key for key in needed if key not in given]
     extra = [key for key in given if key not in needed + optional]
@@ -295,7 +340,8 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
         fix = "; ".join(part for part in (f"remove {', '.join(extra)}" if extra else "",
                                           f"give {', '.join(missing)}" if missing else "") if part)
         also = f" (and optionally {', '.join(optional)})" if optional else ""
-        raise StudyFileError(f"{where}: a {item.distribution} distribution takes {' and '.join(needed)}{also} only: {fix}")
+        article = "an" if item.distribution[0] in "aeiou" else "a"
+        raise StudyFileError(f"{where}: {article} {item.distribution} distribution takes {' and '.join(needed)}{also} only: {fix}")
     axes = ()
     if item.frame == "fitting":
         if kind != "point":
@@ -316,6 +362,8 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
             size = tuple(value) if isinstance(value, list) else (float(value),) * 3
             if len(size) != 3:
                 raise ValueError(f"{needed[0]} must be one number or three [x, y, z]")
+        elif item.distribution == "empirical":
+            size = tuple(item.values) if item.file is None else _measured_file(source.parent / item.file, item, where)
         elif "range" in needed:
             if len(item.range) != 2:
                 raise ValueError("range must be [low, high]")
@@ -336,6 +384,57 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
         return Tolerance(item.parameter, item.distribution, size, item.label, tuple(item.shared_with), axes)
     except ValueError as exc:
         raise StudyFileError(f"{where}: {exc}") from None
+
+
+def _correlated(variation: Variation, sections: list[CorrelationSection], vary: list[VarySection],
+                source: str) -> Variation:
+    """The variation with the correlations of [[correlation]]: each names tolerances by their label, or by their
+    parameter when one [[vary]] alone has it."""
+    correlations = []
+    for k, section in enumerate(sections):
+        members = []
+        for j, name in enumerate(section.tolerances):
+            found = [i for i, item in enumerate(vary) if item.label == name] or [
+                i for i, item in enumerate(vary) if item.parameter == name and not item.label]
+            if len(found) != 1:
+                known = [item.label or item.parameter for item in vary]
+                why = (f"{len(found)} [[vary]] entries have that parameter: give them labels and name the label"
+                       if found else f"no [[vary]] entry has that label or parameter; choose one of {', '.join(known)}")
+                raise StudyFileError(f"{source}: correlation[{k}].tolerances[{j}] = \"{name}\": {why}")
+            members.append(found[0])
+        try:
+            correlations.append(Correlation(tuple(members), tuple(tuple(row) for row in section.matrix)))
+            correlated = replace(variation, correlations=tuple(correlations))
+        except ValueError as exc:
+            raise StudyFileError(f"{source}: correlation[{k}].{exc}") from None
+    return correlated
+
+
+def _precision(section: SamplingSection, base: StudyBase, source: str) -> Precision:
+    """The Precision of [sampling.precision]: a quantity of the study, a cap at least the first round."""
+    given = section.precision
+    names = [q.name for q in quantities(base.obstacle_names)]
+    if given.quantity not in names:
+        raise StudyFileError(f"{source}: sampling.precision.quantity = \"{given.quantity}\": unknown; choose one of "
+                             f"{', '.join(names)}")
+    if given.max_samples < section.samples:
+        raise StudyFileError(f"{source}: sampling.precision.max_samples = {given.max_samples}: less than the first "
+                             f"round's sampling.samples = {section.samples}; give at least that many")
+    try:
+        unit = next(q.unit for q in quantities(base.obstacle_names) if q.name == given.quantity)
+        return Precision(given.quantity, given.statistic, given.half_width, given.max_samples, unit)
+    except ValueError as exc:
+        raise StudyFileError(f"{source}: sampling.precision.{exc}") from None
+
+
+def _measured_file(path: Path, item: VarySection, where: str) -> tuple[float, ...]:
+    """The measured values of an empirical [[vary]] entry's file (and column)."""
+    try:
+        return read_measured_values(path, item.column)
+    except OSError as exc:
+        raise StudyFileError(f"{where}: file = \"{item.file}\": cannot read {path}: {exc.strerror or exc}") from None
+    except ValueError as exc:
+        raise StudyFileError(f"{where}: file = \"{item.file}\": {exc}") from None
 
 
 def _limits(given: dict[str, float], base: StudyBase, source: str) -> tuple[Limit, ...]:

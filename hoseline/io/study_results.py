@@ -38,10 +38,13 @@ SWEEP_TABLES = ("bodies", "obstacles", "sweep")
 
 
 def fingerprint(study_text: str, base_text: str, study: Study) -> str:
-    """A hash of everything the samples depend on: the study and base files and the obstacle meshes."""
+    """A hash of everything the samples depend on: the study and base files, the tolerances' sizes (measured values
+    read from a file among them) and the obstacle meshes."""
     digest = hashlib.sha256()
     for text in (study_text, base_text):
         digest.update(text.encode("utf-8"))
+    for tolerance in study.variation.tolerances:
+        digest.update(np.array(tolerance.size, dtype=float).tobytes())
     sweep = study.base.sweep
     for obstacle in () if sweep is None else sweep.obstacles:
         digest.update(np.ascontiguousarray(obstacle.vertices, dtype=float).tobytes())
@@ -199,10 +202,13 @@ def study_document(outcome: StudyOutcome) -> dict:
         "base": "sweep" if study.base.sweep is not None else "placement",
         "problem": problem_to_dict(study.base.problem),
         "sampling": {"method": study.sampling.method, "samples": study.sampling.count, "seed": study.sampling.seed,
-                     "batch": study.sampling.batch_size()},
+                     "batch": None if study.sampling.rounds else study.sampling.batch_size(), "rounds": [
+                         {"samples": size, "batch": study.sampling.round_batch(size)} for size in study.sampling.rounds]},
         "tolerances": [{"parameter": t.parameter, "shared_with": list(t.shared_with), "distribution": t.distribution,
                         "size": list(t.size), "axes": [list(row) for row in t.axes] or "world", "label": t.name}
                        for t in study.variation.tolerances],
+        "correlations": [{"tolerances": [study.variation.tolerances[k].name for k in c.tolerances],
+                          "matrix": [list(row) for row in c.matrix]} for c in study.variation.correlations],
         "nominal": dict(zip(names, outcome.nominal)),
         "quantities": {
             q.name: {"unit": q.unit, "mean": s.mean, "mean_ci95": list(s.mean_interval), "std": s.std,
@@ -223,6 +229,13 @@ def study_document(outcome: StudyOutcome) -> dict:
         "notes": outcome.notes,
         "run": outcome.run,
     }
+    if outcome.precision is not None:
+        reached = outcome.precision
+        document["precision"] = {
+            "quantity": reached.precision.quantity, "unit": reached.precision.unit, "statistic": reached.precision.statistic,
+            "half_width_asked": reached.precision.half_width, "max_samples": reached.precision.max_samples,
+            "estimate": reached.estimate, "ci95": [reached.low, reached.high], "half_width": reached.half_width,
+            "samples": reached.samples, "rounds": list(reached.rounds), "reached": reached.reached}
     first = outcome.first_order
     if first is not None:
         document["first_order"] = {

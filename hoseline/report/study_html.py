@@ -97,11 +97,27 @@ def _intro(outcome: StudyOutcome) -> str:
     study = outcome.study
     hose = study.base.problem.hose
     kind = (f"a sweep of {study.base.pose_count} poses" if study.base.sweep is not None else "the placement")
-    tolerances = "".join(f"<li>{html.escape(t.name)}: {html.escape(t.distribution)} "
-                         f"{', '.join(f'{v:g}' for v in t.size)}</li>" for t in study.variation.tolerances)
+    tolerances = "".join(f"<li>{html.escape(t.name)}: {html.escape(t.distribution)} {_size(t)}</li>"
+                         for t in study.variation.tolerances)
     text = (f"<p>{outcome.count} samples ({html.escape(study.sampling.method)}, seed {study.sampling.seed}) of "
             f"{kind} of a {hose.length:g} mm hose ({hose.segments} segments).</p>")
-    return text + (f"<ul>{tolerances}</ul>" if tolerances else "")
+    if outcome.precision is not None:
+        status = "ok" if outcome.precision.reached else "bad"
+        text += (f'<p>Sampled to a precision: <span class="{status}">{html.escape(outcome.precision.describe())}'
+                 "</span>.</p>")
+    correlations = "".join(
+        f"<li>{html.escape(', '.join(study.variation.tolerances[k].name for k in c.tolerances))}: correlation matrix "
+        f"{html.escape(str([list(row) for row in c.matrix]))} (of their normal scores, a Gaussian copula)</li>"
+        for c in study.variation.correlations)
+    return text + (f"<ul>{tolerances}{correlations}</ul>" if tolerances else "")
+
+
+def _size(tolerance) -> str:
+    """A tolerance's size for the report: its numbers, or for measured values their count and range."""
+    size = tolerance.size
+    if tolerance.distribution == "empirical":
+        return f"{len(size)} measured values from {size[0]:g} to {size[-1]:g}"
+    return ", ".join(f"{v:g}" for v in size)
 
 
 def _probability_table(outcome: StudyOutcome) -> str:

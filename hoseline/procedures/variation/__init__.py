@@ -2,7 +2,7 @@
 
 tolerances.py turns a point of the unit hypercube into the deviations of one hose from its
 drawing (mount positions and directions, length, stiffness, weight, clocking) and a problem
-built with them; designs.py draws the points (Monte Carlo, Latin hypercube, Sobol);
+built with them, and correlation.py correlates tolerances by a matrix (a Gaussian copula); designs.py draws the points (Monte Carlo, Latin hypercube, Sobol);
 quantities.py defines what is judged and the limits; samples.py solves one sample (placement or
 sweep) and reads it; nominal.py holds the nominal placement's equilibria and starts samples from
 them (warm start); engine.py runs the samples in batches on Dask distributed, and scheduler.py
@@ -16,7 +16,8 @@ limit a constraint); reliability.py holds FORM, SORM (Breitung) and importance s
 normal space, and rare.py the hose's limit states for them (margins with exact gradients, the most
 probable failure point of each limit); global_sensitivity.py draws the Saltelli design and estimates
 Sobol' indices with bootstrap intervals; worst_case.py finds each quantity's worst-case corner;
-study.py holds a study and reads its outcome off the samples; run.py runs a study from start to end.
+precision.py sizes rounds of samples until a statistic is known as well as asked; study.py holds a
+study and reads its outcome off the samples; run.py runs a study from start to end.
 
 May import: model/, mechanics/, placement/, geometry/, sweep/.  Not: scans/, io/, report/.
 """

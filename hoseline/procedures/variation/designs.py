@@ -35,6 +35,24 @@ def unit_design(method: str, count: int, dimensions: int, seed: int) -> np.ndarr
         return qmc.Sobol(d=dimensions, scramble=True, rng=seed).random(count)
 
 
+def round_design(method: str, rounds: tuple[int, ...], dimensions: int, seed: int) -> np.ndarray:
+    """(sum(rounds), dimensions) points in (0, 1) drawn in rounds of rounds[r] samples (precision.py).
+
+    Monte Carlo and Sobol' rows continue their sequence: the rows of unit_design(method, sum(rounds)), so the
+    first round is the design of its samples alone and a round never changes an earlier one.  A Latin
+    hypercube is drawn afresh for each round (the first from the seed, round r from the seed and r), each
+    round stratified on its own.
+    """
+    if method != "latin-hypercube":
+        return unit_design(method, sum(rounds), dimensions, seed)
+    from scipy.stats import qmc
+
+    first = unit_design(method, rounds[0], dimensions, seed)
+    later = [qmc.LatinHypercube(d=dimensions, rng=np.random.default_rng([seed, r])).random(count)
+             for r, count in enumerate(rounds[1:], start=1)]
+    return np.vstack([first, *later])
+
+
 def balanced(method: str, count: int) -> bool:
     """False for a Sobol design whose count is not a power of two (its balance is lost)."""
     return method != "sobol" or (count & (count - 1)) == 0

@@ -162,15 +162,17 @@ class Engine:
         batch_size: int,
         on_batch: Callable[[int, dict[str, np.ndarray]], None],
         done: Collection[int] = (),
+        first: int = 0,
     ) -> None:
         """Evaluate every batch of the samples with deviations `coordinates` (count, width) not in `done`, handing
         each to on_batch(k, arrays) (samples.evaluate_batch) as it finishes.
 
-        batch_size: samples per batch (default_batch_size).  Raises whatever a batch raises beyond the
+        batch_size: samples per batch (default_batch_size).  first: the index of the first sample (a later round
+        of sampling to a precision continues the study's numbering).  Raises whatever a batch raises beyond the
         samples' own failures (which are recorded in the arrays), e.g. a worker that died.
         """
         slices = batch_slices(len(coordinates), batch_size)
-        indices = np.arange(len(coordinates))
+        indices = first + np.arange(len(coordinates))
         todo = [k for k in range(len(slices)) if k not in done]
         if not todo:
             return

@@ -1,5 +1,6 @@
-"""A study from start to end: the nominal hose, the sensitivities, the samples, the worst-case corners, the Sobol'
-indices, the rare failures (FORM and importance sampling), the design search, the outcome.
+"""A study from start to end: the nominal hose, the sensitivities, the samples (in rounds, to a requested precision:
+precision.py), the worst-case corners, the Sobol' indices, the rare failures (FORM and importance sampling), the
+design search, the outcome.
 
 Batches go through a store (anything with finished() and save(k, arrays); io/study_results.py
 keeps them as files so an interrupted study resumes): finished batches are not run again.
@@ -15,9 +16,11 @@ from typing import Protocol
 import numpy as np
 
 from hoseline.procedures.placement.continuation import PlacementError, Progress
+from hoseline.procedures.variation.designs import balanced
 from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
 from hoseline.procedures.variation.global_sensitivity import sobol_indices
+from hoseline.procedures.variation.precision import PrecisionOutcome, next_total
 from hoseline.procedures.variation.rare import RareEvent, RareTask, RareUnion, rare_event, standard_normal_deviations
 from hoseline.procedures.variation.reliability import importance_estimate, importance_points, union_first_order
 from hoseline.procedures.variation.scheduler import scheduler_address
@@ -56,8 +59,8 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
               progress: Progress | None = None) -> StudyOutcome:
     """Run `study` and return its outcome.
 
-    stores: stage name ("samples", "design", "optimise", "corners", "sobol", "form", "importance_K") -> its BatchStore
-    (default: in memory).  where: where the
+    stores: stage name ("samples", "samples_R" (round R of sampling to a precision), "design", "optimise",
+    "corners", "sobol", "form", "importance_K") -> its BatchStore (default: in memory).  where: where the
     batches run.  progress: callable(phase, fraction).  Raises PlacementError when the nominal hose
     cannot be solved, ClusterError at once (before any solving) when an existing cluster cannot be reached.
     """
@@ -85,7 +88,12 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         engine.ready()
         timings["cluster"] = time.perf_counter() - tick
         tick = time.perf_counter()
-        samples = _stage(engine, "samples", context, coordinates, study.sampling.batch_size(), stores, progress)
+        precision = None
+        if study.sampling.precision is None or len(coordinates) == 0:
+            samples = _stage(engine, "samples", context, coordinates, study.sampling.batch_size(), stores, progress)
+        else:
+            study, samples, precision = _sample_to_precision(engine, context, study, stores, progress)
+            coordinates = study.coordinates()
         timings["samples"] = time.perf_counter() - tick
         design_samples = None
         if study.design is not None:
@@ -134,10 +142,17 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
     outcome.rare_union = rare_union
     outcome.sobol = sobol
     outcome.worst_cases = corners or []
+    outcome.precision = precision
+    if precision is not None and not precision.reached:
+        outcome.notes.append(f"sampling to a precision: {precision.describe()}")
     if study.worst_case and sensitivities is None:
         outcome.notes.append("no worst-case corners: they follow the sensitivities, which this study has not")
     if sobol is not None and outcome.first_order is not None:
         outcome.notes.extend(_sobol_notes(outcome))
+    if sobol is not None and study.variation.correlations:
+        outcome.notes.append("the Sobol' indices of correlated tolerances are those of their independent normal scores "
+                             "in each correlation matrix's order (its Cholesky factor): the first tolerance of a "
+                             "matrix carries what the others share with it, a later one only its own part")
     outcome.notes.extend(note for event in outcome.rare_events for note in event.notes())
     outcome.run = {
         "where": where.describe(),
@@ -158,8 +173,9 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
 
 
 def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.ndarray, batch_size: int,
-           stores: Callable[[str], BatchStore], progress: Progress | None) -> dict[str, np.ndarray] | None:
-    """Run one stage's batches (skipping those its store has) and return its merged samples (None if empty)."""
+           stores: Callable[[str], BatchStore], progress: Progress | None, first: int = 0) -> dict[str, np.ndarray] | None:
+    """Run one stage's batches (skipping those its store has) and return its merged samples (None if empty).
+    first: the index of its first sample (a later round of sampling to a precision)."""
     if len(coordinates) == 0:
         return None
     store = stores(name)
@@ -172,8 +188,32 @@ def _stage(engine: Engine, name: str, context: StudyContext, coordinates: np.nda
         if progress is not None:
             progress(name, len(batches) / total)
 
-    engine.run(context, coordinates, batch_size, keep, done=set(batches))
+    engine.run(context, coordinates, batch_size, keep, done=set(batches), first=first)
     return merge_batches(batches)
+
+
+def _sample_to_precision(engine: Engine, context: StudyContext, study: Study, stores: Callable[[str], BatchStore],
+                         progress: Progress | None) -> tuple[Study, dict[str, np.ndarray], PrecisionOutcome]:
+    """The samples of rounds (stages "samples", "samples_1", ...) until [sampling.precision]'s statistic is known as
+    well as asked or the cap is reached (precision.py): the study with the rounds drawn, the merged samples and how
+    it ended."""
+    precision = study.sampling.precision
+    column = [q.name for q in study.quantities].index(precision.quantity)
+    power_of_two = study.sampling.method == "sobol" and balanced("sobol", study.sampling.count)
+    rounds = [study.sampling.count]
+    parts = {}
+    while True:
+        study = replace(study, sampling=replace(study.sampling, count=sum(rounds), rounds=tuple(rounds)))
+        first = sum(rounds[:-1])
+        part = _stage(engine, "samples" if len(rounds) == 1 else f"samples_{len(rounds) - 1}", context,
+                      study.coordinates()[first:], study.sampling.round_batch(rounds[-1]), stores, progress, first)
+        parts[len(rounds) - 1] = part
+        samples = merge_batches(parts)
+        estimate, low, high = precision.interval(samples["values"][:, column])
+        reached = (high - low) / 2.0 <= precision.half_width
+        if reached or sum(rounds) >= precision.max_samples:
+            return study, samples, PrecisionOutcome(precision, estimate, low, high, sum(rounds), tuple(rounds), reached)
+        rounds.append(next_total(sum(rounds), (high - low) / 2.0, precision, power_of_two) - sum(rounds))
 
 
 def _worst_cases(engine: Engine, context: StudyContext, study: Study, sensitivities, stores: Callable[[str], BatchStore],

@@ -111,23 +111,35 @@ def spread(values: np.ndarray) -> Spread:
     if n < 4:
         nan = float("nan")
         return Spread(nan, nan, nan, nan, (nan,) * len(PERCENTILES), nan, nan, n, (nan, nan), ((nan, nan),) * len(PERCENTILES))
-    from scipy.stats import binom, t  # here: scipy.stats takes a second to import, and a refused study file needs none
-
     variance = float(np.var(x, ddof=1))
     m4 = float(np.mean((x - x.mean()) ** 4))
     error = float(np.sqrt(max(m4 - variance**2 * (n - 3) / (n - 1), 0.0) / n))
-    half = float(t.ppf(0.5 + CONFIDENCE / 2.0, n - 1) * np.sqrt(variance / n))
     ordered = np.sort(x)
-    intervals = []
-    for p in PERCENTILES:
-        # ranks l, u (from 1) with P(l <= B <= u - 1) >= CONFIDENCE, B ~ Binomial(n, p) the samples below the percentile
-        low = int(binom.ppf((1.0 - CONFIDENCE) / 2.0, n, p / 100.0))
-        high = int(binom.ppf(0.5 + CONFIDENCE / 2.0, n, p / 100.0)) + 1
-        intervals.append((float(ordered[low - 1]) if low >= 1 else -math.inf,
-                          float(ordered[high - 1]) if high <= n else math.inf))
     return Spread(float(x.mean()), float(np.sqrt(variance)), variance, error,
                   tuple(float(v) for v in np.percentile(x, PERCENTILES)), float(x.min()), float(x.max()), n,
-                  (float(x.mean()) - half, float(x.mean()) + half), tuple(intervals))
+                  mean_interval(x), tuple(percentile_interval(ordered, p) for p in PERCENTILES))
+
+
+def mean_interval(x: np.ndarray) -> tuple[float, float]:
+    """The CONFIDENCE interval of the mean of the finite values `x` (two or more), Student's t."""
+    from scipy.stats import t  # here: scipy.stats takes a second to import, and a refused study file needs none
+
+    n = x.size
+    half = float(t.ppf(0.5 + CONFIDENCE / 2.0, n - 1) * np.sqrt(np.var(x, ddof=1) / n))
+    return float(x.mean()) - half, float(x.mean()) + half
+
+
+def percentile_interval(ordered: np.ndarray, p: float) -> tuple[float, float]:
+    """The distribution-free CONFIDENCE interval of the p-th percentile (p in (0, 100)) of sorted finite values:
+    the order statistics whose ranks bound the binomial count of samples below it (-inf or inf where too few
+    samples lie beyond it to bound it)."""
+    from scipy.stats import binom
+
+    n = ordered.size
+    # ranks l, u (from 1) with P(l <= B <= u - 1) >= CONFIDENCE, B ~ Binomial(n, p) the samples below the percentile
+    low = int(binom.ppf((1.0 - CONFIDENCE) / 2.0, n, p / 100.0))
+    high = int(binom.ppf(0.5 + CONFIDENCE / 2.0, n, p / 100.0)) + 1
+    return (float(ordered[low - 1]) if low >= 1 else -math.inf, float(ordered[high - 1]) if high <= n else math.inf)
 
 
 @dataclass(frozen=True)

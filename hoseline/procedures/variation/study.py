@@ -14,11 +14,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hoseline.model.problem import Problem
-from hoseline.procedures.variation.designs import balanced, unit_design
+from hoseline.procedures.variation.designs import balanced, round_design
 from hoseline.procedures.variation.design_search import DesignGrid, DesignOutcome
 from hoseline.procedures.variation.engine import default_batch_size
 from hoseline.procedures.variation.quantities import Limit, Quantity, natural_scale, quantities
 from hoseline.procedures.variation.global_sensitivity import SobolIndices, saltelli_design
+from hoseline.procedures.variation.precision import Precision, PrecisionOutcome
 from hoseline.procedures.variation.rare import RareEvent, RareUnion, Reliability
 from hoseline.procedures.variation.samples import StudyBase, failure_cause
 from hoseline.procedures.variation.sensitivity import Sensitivities
@@ -45,17 +46,25 @@ OTHER_BRANCH = 1e-4  # of the length: a warm-started sample this far from the pu
 class Sampling:
     """How the tolerances are sampled: method (designs.METHODS), count, seed, batch (samples per task; None:
     default), start: "straight" (every placement sample by the published sequence from the straight hose) or
-    "nominal" (by Newton from the nominal hose's equilibria, checked on a subset: samples.py)."""
+    "nominal" (by Newton from the nominal hose's equilibria, checked on a subset: samples.py).
+    precision: sample in rounds until a statistic is known this well (precision.py; count is then the first
+    round's); rounds: the samples of each round drawn (run.py sets it and count to their sum; () : one round)."""
 
     method: str = "sobol"
     count: int = 256
     seed: int = 0
     batch: int | None = None
     start: str = "straight"
+    precision: Precision | None = None
+    rounds: tuple[int, ...] = ()
 
     def batch_size(self) -> int:
         """Samples per task."""
-        return self.batch or default_batch_size(self.count)
+        return self.round_batch(self.count)
+
+    def round_batch(self, samples: int) -> int:
+        """Samples per task of a round of `samples` (each round of sampling to a precision is a stage of its own)."""
+        return self.batch or default_batch_size(samples)
 
 
 @dataclass(frozen=True)
@@ -101,7 +110,8 @@ class Study:
         """(count, width) the deviations of every sample (empty without tolerances)."""
         if not self.variation.tolerances or self.sampling.count == 0:
             return np.zeros((0, self.variation.width))
-        unit = unit_design(self.sampling.method, self.sampling.count, self.variation.dimensions, self.sampling.seed)
+        sampling = self.sampling
+        unit = round_design(sampling.method, sampling.rounds or (sampling.count,), self.variation.dimensions, sampling.seed)
         return self.variation.coordinates(unit)
 
     def sobol_coordinates(self) -> np.ndarray:
@@ -171,6 +181,7 @@ class StudyOutcome:
     rare_union: the probability of breaking any of them (two or more with a design point; else None).
     sobol: Sobol' indices of every quantity (quantities order) per tolerance, None without [sobol].
     worst_cases: per smooth quantity its worst-case corner, first-order and solved (worst_case.WorstCase).
+    precision: how sampling to a precision ended (None without [sampling.precision]).
     notes: what a reader must know (unbalanced design, disagreement, failures).  run: figures of the run.
     """
 
@@ -192,6 +203,7 @@ class StudyOutcome:
     rare_union: RareUnion | None = None
     sobol: SobolIndices | None = None
     worst_cases: list[WorstCase] = field(default_factory=list)
+    precision: PrecisionOutcome | None = None
     notes: list[str] = field(default_factory=list)
     run: dict = field(default_factory=dict)
 

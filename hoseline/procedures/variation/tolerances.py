@@ -25,7 +25,8 @@ alike; several tolerances on one parameter add up (a length tolerance and the ch
 pressure).  A tolerance shared with other parameters of its kind (`shared_with`: a shared
 contributor, e.g. the subframe both mounts sit on) adds the same deviation to each of them, so
 they move together: their deviations are correlated, and Variation.covariance has the cross
-terms.  Each also knows the mean and covariance of what it adds, for the first-order variance
+terms; tolerances of any kinds are correlated by a matrix over their normal scores (a Gaussian
+copula, correlation.py), applied by Variation.coordinates to the design's unit points.  Each also knows the mean and covariance of what it adds, for the first-order variance
 (sensitivity.py).
 """
 
@@ -42,6 +43,8 @@ from hoseline.mechanics.rotations import frame_from_tangent, rotation_matrix
 from hoseline.model.clips import Clip
 from hoseline.model.mounts import Mount
 from hoseline.model.problem import Problem
+from hoseline.procedures.variation.correlation import (Correlation, correlated_unit, dimension_correlation,
+                                                       induced_covariance)
 
 COORDINATES = (
     "start.x", "start.y", "start.z", "start.tilt_a", "start.tilt_b",
@@ -105,9 +108,11 @@ DISTRIBUTIONS = {
               "sphere": ("radius",)},
     "tilt": {"cone": ("angle",), "normal": ("sigma",)},
     "offset": {"normal": ("sigma",), "uniform": ("low", "high"), "triangular": ("low", "mode", "high"),
-               "truncnormal": ("mean", "sigma", "low", "high")},
-    "factor": {"lognormal": ("factor",), "loguniform": ("factor",), "uniform": ("low", "high")},
+               "truncnormal": ("mean", "sigma", "low", "high"), "empirical": ("values",)},
+    "factor": {"lognormal": ("factor",), "loguniform": ("factor",), "uniform": ("low", "high"), "empirical": ("values",)},
 }
+MIN_EMPIRICAL_VALUES = 10  # measured values an empirical distribution needs (fewer give its quantiles too coarsely)
+PER_AXIS = {"point": ("normal", "uniform"), "tilt": ("normal",)}  # distributions drawing each axis from its own score
 
 _EDGE = 1e-12  # unit points are kept this far inside (0, 1): the normal's inverse is infinite at the ends
 
@@ -127,7 +132,10 @@ class Tolerance:
     uniform over the spherical cap of the half angle.  lognormal: 95 % of the factors within
     [1/factor, factor].  loguniform: ln(factor) uniform within +-ln(factor).  triangular (offsets):
     the density rising linearly from low to mode and falling to high.  truncnormal (offsets): a normal
-    of the mean (a process offset) and sigma, cut to [low, high].
+    of the mean (a process offset) and sigma, cut to [low, high].  empirical (offsets, factors): size holds
+    measured values (at least MIN_EMPIRICAL_VALUES; deviations in the parameter's unit, or factors), drawn by
+    their interpolated quantiles (the unit score u at position u (n - 1) of the sorted values, NumPy's
+    "linear" quantile; a factor's in its logarithm).
 
     shared_with: other parameters of the same kind and unit that the same deviation moves (a
     shared contributor: e.g. "end.point" and "clips[0].point" with "start.point" for a subframe
@@ -150,9 +158,11 @@ class Tolerance:
                              f"{', '.join(DISTRIBUTIONS[kind])}")
         names = DISTRIBUTIONS[kind][self.distribution]
         size = tuple(float(v) for v in self.size)
-        if len(size) != len(names) or not all(math.isfinite(v) for v in size):
+        if self.distribution == "empirical":
+            size = _measured(self.parameter, kind, size)
+        elif len(size) != len(names) or not all(math.isfinite(v) for v in size):
             raise ValueError(f"{self.parameter}: {self.distribution} needs {', '.join(names)}, finite numbers")
-        if self.distribution == "uniform" and kind in ("offset", "factor"):
+        elif self.distribution == "uniform" and kind in ("offset", "factor"):
             if not size[0] < size[1]:
                 raise ValueError(f"{self.parameter}: uniform range [{size[0]:g}, {size[1]:g}] must have low < high")
             if kind == "factor" and size[0] <= 0.0:
@@ -206,6 +216,12 @@ class Tolerance:
         return tuple(parameter_kind(parameter)[1] for parameter in self.parameters)
 
     @property
+    def per_axis(self) -> bool:
+        """Whether each of its axes is drawn from its own unit score alone (offsets, factors; normal and uniform
+        points; normal tilts), so that it can be correlated axis by axis (correlation.py)."""
+        return self.kind not in PER_AXIS or self.distribution in PER_AXIS[self.kind]
+
+    @property
     def kind(self) -> str:
         """point, tilt, offset or factor."""
         return parameter_kind(self.parameter)[0]
@@ -227,7 +243,7 @@ class Tolerance:
 
     def values(self, unit: np.ndarray) -> np.ndarray:
         """(n, len(coordinates)) coordinate values of (n, dimensions) unit points in (0, 1) (in the world axes)."""
-        values = self._along_axes(unit)
+        values = self.along_axes(unit)
         return values @ np.array(self.axes) if self.axes else values
 
     def mean(self) -> np.ndarray:
@@ -243,7 +259,7 @@ class Tolerance:
         axes = np.array(self.axes)
         return axes.T @ covariance @ axes
 
-    def _along_axes(self, unit: np.ndarray) -> np.ndarray:
+    def along_axes(self, unit: np.ndarray) -> np.ndarray:
         """values() along the tolerance's own axes."""
         u = np.clip(np.asarray(unit, dtype=float), _EDGE, 1.0 - _EDGE)
         size = np.array(self.size)
@@ -274,7 +290,16 @@ class Tolerance:
                             high - np.sqrt((1.0 - u) * (high - low) * (high - mode)))
         if self.distribution == "truncnormal":
             return _truncated(size).ppf(u)
+        if self.distribution == "empirical":
+            knots = self._empirical_knots()
+            return np.interp(u * (knots.size - 1), np.arange(knots.size), knots)
         return math.log(size[0]) * (2.0 * u - 1.0)  # loguniform
+
+    def _empirical_knots(self) -> np.ndarray:
+        """The sorted measured values of an empirical tolerance (ln of them for a factor), between which its inverse
+        distribution function interpolates: the unit score u lands at position u (n - 1) of the n knots."""
+        values = np.array(self.size)
+        return np.log(values) if self.kind == "factor" else values
 
     def _mean_along_axes(self) -> np.ndarray:
         """mean() along the tolerance's own axes."""
@@ -287,6 +312,9 @@ class Tolerance:
             return np.array([sum(self.size) / 3.0])
         if self.distribution == "truncnormal":
             return np.array([float(_truncated(self.size).mean())])
+        if self.distribution == "empirical":
+            knots = self._empirical_knots()
+            return np.array([float(np.mean(0.5 * (knots[1:] + knots[:-1])))])  # the mean of each linear piece
         return np.zeros(len(self.coordinates))
 
     def _covariance_along_axes(self) -> np.ndarray:
@@ -317,7 +345,26 @@ class Tolerance:
             return np.array([[(low**2 + mode**2 + high**2 - low * mode - low * high - mode * high) / 18.0]])
         if self.distribution == "truncnormal":
             return np.array([[float(_truncated(self.size).var())]])
+        if self.distribution == "empirical":
+            a, b = self._empirical_knots()[:-1], self._empirical_knots()[1:]
+            second = float(np.mean((a * a + a * b + b * b) / 3.0))  # E[X^2] of each linear piece, equally likely
+            return np.array([[second - self.mean()[0] ** 2]])
         return np.array([[math.log(size[0]) ** 2 / 3.0]])  # loguniform
+
+
+def _measured(parameter: str, kind: str, values: tuple[float, ...]) -> tuple[float, ...]:
+    """The measured values of an empirical tolerance, checked (enough, finite, factors positive, not all equal)
+    and sorted."""
+    if len(values) < MIN_EMPIRICAL_VALUES or not all(math.isfinite(v) for v in values):
+        raise ValueError(f"{parameter}: empirical needs at least {MIN_EMPIRICAL_VALUES} measured values, finite "
+                         f"numbers; got {len(values)}" + ("" if all(math.isfinite(v) for v in values) else
+                                                         " with some not finite"))
+    if kind == "factor" and min(values) <= 0.0:
+        raise ValueError(f"{parameter}: empirical factors must be positive (measured over nominal, e.g. 1.05), got "
+                         f"{min(values):g}")
+    if min(values) == max(values):
+        raise ValueError(f"{parameter}: empirical values are all {values[0]:g}: they vary nothing; remove the entry")
+    return tuple(sorted(values))
 
 
 def _truncated(size: tuple[float, ...]):
@@ -346,10 +393,13 @@ class Variation:
     """All tolerances of a study, each with its own dimensions of the unit hypercube, in order.
 
     clips: the number of clips of the problem varied (its coordinates: coordinate_names(clips)).
+    correlations: Gaussian copulas between tolerances (correlation.py), each tolerance in one at most; those
+    of one correlation have as many axes each and draw each axis from its own score (Tolerance.per_axis).
     """
 
     tolerances: tuple[Tolerance, ...]
     clips: int = 0
+    correlations: tuple[Correlation, ...] = ()
 
     def __post_init__(self) -> None:
         for tolerance in self.tolerances:
@@ -357,6 +407,25 @@ class Variation:
                 k = clip_index(parameter)
                 if k is not None and k >= self.clips:
                     raise ValueError(f"{parameter}: the problem has {self.clips} clip(s), numbered from 0")
+        seen: set[int] = set()
+        for correlation in self.correlations:
+            members = correlation.tolerances
+            if max(members) >= len(self.tolerances) or min(members) < 0:
+                raise ValueError(f"tolerances {list(members)}: there are {len(self.tolerances)} tolerances")
+            if seen & set(members):
+                raise ValueError(f"tolerances: {self.tolerances[min(seen & set(members))].name} is in two correlations: "
+                                 "give one matrix over all the tolerances correlated with it")
+            seen |= set(members)
+            for k in members:
+                tolerance = self.tolerances[k]
+                if not tolerance.per_axis:
+                    raise ValueError(f"tolerances: {tolerance.name} (a {tolerance.distribution}) draws its axes together, "
+                                     "they cannot be correlated axis by axis; use a normal or uniform distribution per "
+                                     "axis, or shared_with")
+                if tolerance.dimensions != self.tolerances[members[0]].dimensions:
+                    raise ValueError(f"tolerances: {tolerance.name} has {tolerance.dimensions} axes, "
+                                     f"{self.tolerances[members[0]].name} {self.tolerances[members[0]].dimensions}: "
+                                     "tolerances are correlated axis by axis, so only with as many axes")
 
     @property
     def width(self) -> int:
@@ -386,6 +455,8 @@ class Variation:
     def coordinates(self, unit: np.ndarray) -> np.ndarray:
         """(n, width) deviations of the hoses at unit points (n, dimensions)."""
         unit = np.atleast_2d(np.asarray(unit, dtype=float))
+        if self.correlations:
+            unit = correlated_unit(unit, self.cholesky())
         out = np.zeros((unit.shape[0], self.width))
         column = 0
         for tolerance in self.tolerances:
@@ -403,16 +474,36 @@ class Variation:
                 out[list(target)] += tolerance.mean()
         return out
 
+    def cholesky(self) -> np.ndarray:
+        """(dimensions, dimensions) lower Cholesky factor of the normal scores' correlation (correlation.py)."""
+        return np.linalg.cholesky(dimension_correlation(self.correlations, tuple(t.dimensions for t in self.tolerances)))
+
     def covariance(self) -> np.ndarray:
-        """(width, width) covariance of the deviations (tolerances independent of each other; a shared one gives the
-        same block between every two parameters it moves)."""
+        """(width, width) covariance of the deviations (a shared tolerance gives the same block between every two
+        parameters it moves; two correlated ones their induced covariance between each of their parameters)."""
         out = np.zeros((self.width, self.width))
         for tolerance in self.tolerances:
-            covariance = tolerance.covariance()
-            for first in tolerance.targets:
-                for second in tolerance.targets:
-                    out[np.ix_(first, second)] += covariance
+            _add_block(out, tolerance, tolerance, tolerance.covariance())
+        for correlation in self.correlations:
+            for a, i in enumerate(correlation.tolerances):
+                for b, j in enumerate(correlation.tolerances):
+                    if a != b:
+                        first, second = self.tolerances[i], self.tolerances[j]
+                        own = induced_covariance(first, second, correlation.matrix[a][b])
+                        _add_block(out, first, second, _world_axes(first).T @ own @ _world_axes(second))
         return out
+
+
+def _world_axes(tolerance: Tolerance) -> np.ndarray:
+    """(k, k) the tolerance's own axes as rows in the world axes (the identity when it has none given)."""
+    return np.array(tolerance.axes) if tolerance.axes else np.eye(len(tolerance.coordinates))
+
+
+def _add_block(out: np.ndarray, first: Tolerance, second: Tolerance, block: np.ndarray) -> None:
+    """Add the covariance `block` between the deviations of two tolerances to `out` at every pair of their targets."""
+    for one in first.targets:
+        for other in second.targets:
+            out[np.ix_(one, other)] += block
 
 
 def tilt_axes(direction: np.ndarray) -> np.ndarray:

@@ -1,7 +1,7 @@
 """Worst-case (corner) analysis: each quantity at the corner of the tolerances that makes it worst.
 
 A tolerance's worst-case range is its support when bounded (uniform, triangular, sphere, cone,
-loguniform), WORST_CASE_SIGMAS standard deviations either side of the mean when not (normal,
+loguniform; an empirical one's measured extremes), WORST_CASE_SIGMAS standard deviations either side of the mean when not (normal,
 lognormal in ln of the factor; a truncated normal within both).  To first order a quantity Q0 + g.c is
 worst where each tolerance takes the point of its range furthest along -g (a minimum: bend radius,
 clearance) or +g (a maximum: torque, twist rate): the corner of a box, the point of a ball or cone along
@@ -63,6 +63,8 @@ def _range(tolerance: Tolerance) -> tuple[float, float]:
     if name == "lognormal":
         spread = WORST_CASE_SIGMAS * math.log(size[0]) / Z95
         return -spread, spread
+    if name == "empirical":  # the measured extremes
+        return (math.log(size[0]), math.log(size[-1])) if tolerance.kind == "factor" else (size[0], size[-1])
     return -math.log(size[0]), math.log(size[0])  # loguniform
 
 
