@@ -41,6 +41,7 @@ const panel = new Panel({
 });
 const busy = new Busy(view);
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
+studioScene.awaitedUntil = () => connection.awaitedUntil;  // a frame due while a target is answered waits for it
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
 const toolbar = view.querySelector('.toolbar');
 const edits = new EditHistory(send, toolbar);

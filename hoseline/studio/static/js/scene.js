@@ -1,7 +1,10 @@
 // The 3D view: renderer, camera (z up, as the problem files' gravity), orbit/pan/zoom, a ground
 // grid and axes, view presets.  It draws on demand (after a change), not in a loop, and at most once an
 // animation frame: requestRender() marks the view dirty and the next frame draws it, however many changes
-// came before it (a drag's events, the states answering them, the orbit's moves).
+// came before it (a drag's events, the states answering them, the orbit's moves).  A frame due while an answer
+// from the server is expected soon (awaitedUntil) waits for it, at most until then: without a GPU a frame takes
+// the main thread for 10 ms or more, and drawn just after a drag's target was sent it held up the answer; held,
+// the answer is taken in at once and one frame draws it.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { StaticLayer } from './static_layer.js';
@@ -45,6 +48,8 @@ export class StudioScene {
     this.dirty = false;
     this.drawnCallbacks = [];  // called with performance.now() once the next frame is drawn
     this.later = null;  // the timer of requestRenderAfter
+    this.held = null;  // the timer of a frame held for an awaited answer
+    this.awaitedUntil = () => null;  // performance.now() until which a frame waits for an answer (null: none awaited)
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
   }
@@ -58,15 +63,28 @@ export class StudioScene {
     this.requestRender();
   }
 
-  /** Draw at the next animation frame (once, however often asked before it); then(performance.now()) is
-   * called when that frame has been drawn. */
+  /** Draw at the next animation frame (once, however often asked before it), or, where that frame is held for
+   * an answer, now (once the caller's task is done); then(performance.now()) is called when it has been drawn. */
   requestRender(then) {
     if (then) this.drawnCallbacks.push(then);
     clearTimeout(this.later);
     this.later = null;
+    if (this.held !== null) {
+      clearTimeout(this.held);
+      this.held = null;
+      queueMicrotask(() => this.render());
+      return;
+    }
     if (this.dirty) return;
     this.dirty = true;
-    requestAnimationFrame(() => this.render());
+    requestAnimationFrame(() => this.frame());
+  }
+
+  /** An animation frame: draw, or hold the drawing until the answer awaited comes (requestRender) or is late. */
+  frame() {
+    const until = this.awaitedUntil(), now = performance.now();
+    if (until === null || until <= now) { this.render(); return; }
+    this.held = setTimeout(() => { this.held = null; this.render(); }, until - now);
   }
 
   /** Draw in `ms` milliseconds, unless a frame is asked for before then (which draws this change too). */
