@@ -169,7 +169,7 @@ def solve(
         if coarse_count < props.segments and narrowed_report.converged:
             try:
                 coarse = solve(replace(problem, hose=replace(problem.hose, segments=coarse_count)), control=control,
-                               estimate_error=False)
+                               estimate_error=False, progress=progress)
             except PlacementError as error:
                 result.events.append(f"accuracy: the placement with {coarse_count} segments failed: {error}")
         if coarse is None or _coarse_clamps(final, state, props.segments, coarse_count, props.length) is None:
