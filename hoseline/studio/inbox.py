@@ -33,10 +33,11 @@ class Inbox:
 
     async def get(self, timeout: float | None = None) -> Target | Command | None:
         """The next message, or None when none arrived within `timeout` seconds."""
-        try:
-            await asyncio.wait_for(self.arrival(), timeout)
-        except asyncio.TimeoutError:
-            return None
+        if not self._waiting:
+            try:
+                await asyncio.wait_for(self.arrival(), timeout)
+            except asyncio.TimeoutError:
+                return None
         return self._waiting.popleft()
 
     async def arrival(self) -> None:
