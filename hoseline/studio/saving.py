@@ -43,7 +43,8 @@ def saved_twists(problem: Problem, clamped: Fittings, fresh: Result, shown: np.n
 
     problem: the problem shown.  clamped: where the hose is clamped now (start, end and clip frames,
     rows d1, d2, d3; the end frame with the twist).  fresh: the fresh placement of `problem`.
-    shown: (N+1, 3) the stations shown, mm.  progress: passed to the placements (continuation.Progress).  The twist is the problem's plus the change that
+    shown: (N+1, 3) the stations shown, mm.  progress: passed to the placements (continuation.Progress).
+    The twist is the problem's plus the change that
     clamps the ends as shown (clamp_change), give or take a whole turn (the first of WHOLE_TURNS
     whose placement is within SAVED_SHAPE_TOLERANCE, else the closest); each fixed clip's the
     problem's plus the change that holds it as shown (clip_twist_changes).  Returns {"twist",
@@ -52,7 +53,8 @@ def saved_twists(problem: Problem, clamped: Fittings, fresh: Result, shown: np.n
     instead of "distance" when no such placement can be made.
     """
     change = clamp_change(clamped, fresh)
-    clip_twists = [clip.twist_deg + turn for clip, turn in zip(problem.clips, clip_twist_changes(problem, clamped, fresh))]
+    turned = clip_twist_changes(problem, clamped, fresh)
+    clip_twists = [clip.twist_deg + turn for clip, turn in zip(problem.clips, turned)]
     clips_same = all(abs(twist - clip.twist_deg) <= SAME_TWIST for clip, twist in zip(problem.clips, clip_twists))
     best = None
     for turns in WHOLE_TURNS:
