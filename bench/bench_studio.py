@@ -14,7 +14,8 @@ received and frame drawn.  A move's position goes out with the first target sent
 once, or merged into the next while one is in flight), so for each move:
 
     state received  the first state answering that target or a later one, less the move's time;
-    shape drawn     the animation frame that draws it (its render call returned), less the move's time;
+    shape drawn     the drawing of the view that shows it (its render call returned: at an animation frame, or at
+                    once when the state comes, static/js/scene.js), less the move's time;
     lag at 60 Hz    at every frame drawn during the 60 Hz drag, its time less the time of the latest move whose
                     position it shows; and the last move's time to the frame that shows it.
 

@@ -113,6 +113,27 @@ def test_fixed_clip_splits_the_hose_into_two_independent_solves(placed):
     assert np.linalg.norm(whole.clips[0].force - clip_force) < 1e-7 * np.linalg.norm(clip_force)
 
 
+@pytest.mark.parametrize("clip_twist", [40.0, -130.0])
+def test_a_fixed_clips_twist_turns_it_from_its_lock_as_an_end_fitting_would_be(clip_twist):
+    """A fixed clip at mid-length turned by its twist (right-handed about the clip direction) from the roll it is
+    locked at: the same shape as the two halves solved apart, the first ending at the clip turned by -twist about
+    its end direction (the clip direction reversed), the second turned by the end's twist plus the clip's (its
+    start, the clip, turned the same way).  The held roll is the lock's plus the twist."""
+    problem = _clipped_problem("fixed")
+    (clip,) = problem.clips
+    whole = solve(replace(problem, clips=(replace(clip, twist_deg=clip_twist),)), estimate_error=False)
+    first = solve(Problem(_hose(200.0, 20), problem.start, Mount(CLIP_POINT, -CLIP_DIRECTION), end_twist_deg=-clip_twist,
+                          gravity=GRAVITY), estimate_error=False)
+    second = solve(Problem(_hose(200.0, 20), Mount(CLIP_POINT, CLIP_DIRECTION), problem.end,
+                           end_twist_deg=90.0 + clip_twist, gravity=GRAVITY), estimate_error=False)
+    apart = np.vstack([first.centerline, second.centerline[1:]])
+    assert np.max(np.linalg.norm(whole.centerline - apart, axis=1)) < 1e-6 * 400.0
+    untwisted = solve(problem, estimate_error=False)
+    assert np.max(np.linalg.norm(whole.centerline - untwisted.centerline, axis=1)) > 1.0  # the twist does something
+    turned = whole.clips[0].locked_roll_deg - untwisted.clips[0].locked_roll_deg
+    assert abs(np.remainder(turned - clip_twist + 180.0, 360.0) - 180.0) < 1e-6
+
+
 def test_rotating_clip_carries_no_axial_moment_a_fixed_clip_does(placed):
     axis = CLIP_DIRECTION / np.linalg.norm(CLIP_DIRECTION)
     rotating, fixed = placed["rotating"].clips[0], placed["fixed"].clips[0]
@@ -192,10 +213,10 @@ def _file(**clip):
 def test_clips_round_trip_through_the_problem_file():
     import tomllib
 
-    problem = problem_from_dict(_file(name="bracket"))
+    problem = problem_from_dict(_file(name="bracket", twist=-12.5))
     again = problem_from_dict(tomllib.loads(problem_to_toml(problem)))
     (clip,), (read,) = problem.clips, again.clips
-    assert (read.kind, read.name, read.arc_length) == ("fixed", "bracket", 200.0)
+    assert (read.kind, read.name, read.arc_length, read.twist_deg) == ("fixed", "bracket", 200.0, -12.5)
     assert np.array_equal(read.point, clip.point) and np.array_equal(read.direction, clip.direction)
 
 
@@ -207,6 +228,8 @@ def test_clips_round_trip_through_the_problem_file():
     ({"point": [-300, 100, 0]}, "cannot reach"),
     ({"type": "ball"}, "remove direction"),
     ({"colour": "red"}, "unknown key 'clips[0].colour'"),
+    ({"type": "rotating", "twist": 10.0}, "twist = 10: only a fixed clip holds the hose's roll"),
+    ({"twist": float("nan")}, "clips[0].twist"),
 ])
 def test_bad_clips_are_refused_naming_the_fix(clip, message):
     with pytest.raises(ProblemFileError, match="clips\\[0\\]") as error:

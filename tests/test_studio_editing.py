@@ -215,9 +215,14 @@ def test_after_the_issue_s_drag_the_badge_gives_the_signed_twist_the_file_is_sav
         assert errors == []
 
 
-def test_a_dragged_clip_saves_as_shown(browser, tmp_path):
+@pytest.mark.parametrize("clip, pixels", [("clip1", (0, 30)), ("clip0", (0, -20))], ids=["rotating", "fixed"])
+def test_a_dragged_clip_saves_as_shown(browser, tmp_path, clip, pixels):
+    """Save writes the shape shown without asking (a click on Save downloads the file); a fixed clip dragged keeps the
+    roll it was locked at, clocked against the roll a fresh placement locks, and the file holds that as its twist."""
     with opened_page(browser, Session(clipped_thesis_problem(thesis_problem())), tmp_path) as (page, errors, _):
-        drag_handle(page, "clip1", "Y", "translate", (0, 30))  # the rotating clip
+        before = shown(page)
+        state = drag_handle(page, clip, "Y", "translate", pixels)
+        assert np.max(np.linalg.norm(np.array(state["centerline"]) - before, axis=1)) > 2.0  # the drag moved the hose
         solved = saved_and_solved(page, tmp_path)
         assert np.max(np.linalg.norm(solved - shown(page), axis=1)) <= SAVED_TO_SHOWN_MM
         assert errors == []

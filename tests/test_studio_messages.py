@@ -164,6 +164,21 @@ def test_the_bending_stiffness_box_shows_its_whole_value(page):
     assert width <= room  # nothing cut off
 
 
+def test_the_fittings_boxes_show_their_whole_values(browser, tmp_path):  # noqa: F811 (the browser fixture)
+    """The thesis hose's end tip x (-173.064 mm) and the clips' values to six decimals fit their boxes."""
+    from hoseline.demos.thesis_hose import demo_problem
+    from test_studio_server import clipped_thesis_problem
+
+    with opened_page(browser, Session(clipped_thesis_problem(demo_problem(180.0, segments=30))), tmp_path) as (page, errors, _):
+        page.wait_for_function("() => document.querySelector('tr[data-clip] input').value !== ''")
+        boxes = page.evaluate("""() => [...document.querySelectorAll('table.fittings input')]
+            .map((box) => [box.value, box.scrollWidth, box.clientWidth])""")
+        assert len(boxes) == 24 and "-173.064" in [value for value, _, _ in boxes]
+        assert min(len(value) for value, _, _ in boxes[12:]) >= 8  # the clips' values: 8 characters and more
+        assert [value for value, width, room in boxes if width > room] == []  # nothing cut off
+        assert errors == []
+
+
 def test_place_again_shows_that_the_page_is_busy_until_the_hose_is_placed(page):
     busy = page.locator("#busy")
     assert busy.is_hidden()

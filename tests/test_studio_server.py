@@ -122,6 +122,42 @@ def test_a_burst_of_drag_events_is_coalesced_the_latest_target_wins(client, monk
         assert np.allclose(last, np.array(state["fittings"]["end"]["point"]) + [0.0, 0.0, 0.5 * burst])
 
 
+def test_a_drag_during_the_idle_comparison_abandons_it_and_gets_its_state_first(client, monkeypatch):
+    """The server places the problem afresh while the page is idle; a drag arriving meanwhile does not wait for that:
+    the placement is abandoned after its current continuation step, the drag's state comes first, and the comparison
+    is made again once the page is idle.  Here the first fresh placement goes on for 20 s unless
+    abandoned: a drag that waited for it would get its state after the comparison."""
+    import threading
+
+    import hoseline.studio.session as session_module
+
+    until_abandoned_s = 20.0
+    started, calls = threading.Event(), []
+
+    def slow_then_real(problem, *, progress=None, **options):
+        calls.append(problem)
+        if len(calls) == 1:  # continuation steps that go on (progress after each) until abandoned
+            started.set()
+            ends = time.monotonic() + until_abandoned_s
+            while time.monotonic() < ends:
+                progress("place", 0.5)
+                time.sleep(0.002)
+        return solve(problem, progress=progress, **options)
+
+    monkeypatch.setattr(session_module, "solve", slow_then_real)
+    with client.websocket_connect("/ws") as ws:
+        _, state = opened(ws)
+        ws.send_json({**moved_end(state, [0.0, 0.0, 1.0]), "seq": 1})
+        assert next_state(ws)[0]["seq"] == 1
+        assert started.wait(until_abandoned_s)  # the idle comparison has begun
+        ws.send_json({**moved_end(state, [0.0, 0.0, 2.0]), "seq": 2})
+        assert ws.receive_json()["seq"] == 2  # the drag's state, before any comparison
+        assert client.app.state.studio.abandoned == 1
+        comparison = ws.receive_json()  # made again once idle, of the shape dragged to
+        assert comparison["type"] == "comparison" and not comparison["comparison"]["same"]
+        assert len(calls) >= 2 and np.allclose(calls[-1].end.point, np.array(state["fittings"]["end"]["point"]) + [0, 0, 2])
+
+
 def test_the_inbox_merges_only_consecutive_targets():
     async def drain():
         inbox = Inbox()

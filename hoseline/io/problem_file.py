@@ -51,6 +51,8 @@ Clips (intermediate supports, model/clips.py), one [[clips]] table each, in orde
     point = [-60.0, 120.0, 10.0]     # mm
     direction = [-1.0, 0.3, 0.0]     # the hose's tangent through the clip (not for a ball clip)
     name = "bracket"                 # optional
+    twist = 0.0                      # fixed clip only, optional: degrees turned from the torque-free roll
+                                     # the placement locks it at, right-handed about direction (as [end] twist)
 
 With [mounts], a clip may name IGES points instead of point and direction, as the fittings do:
 tip = "E" with behind = "F" (the hose passes along F->E) or ahead = "F" (along E->F); a ball
@@ -194,6 +196,7 @@ _UNITS = {
     "arc_length": "mm from the start fitting",
     "name": "free text",
     "clips.direction": "the hose's tangent through the clip",
+    "clips.twist": "degrees, a fixed clip turned from its torque-free locked roll about its direction",
     "springs": "8 or 16 springs between adjacent segments",
     "angle_deg": "degrees, spring to the section plane",
     "table": "[deformation mm, force N] pairs, tension positive",
@@ -578,6 +581,7 @@ class ClipSection(_Section):
     point: Point
     direction: Direction | None = None
     name: str = ""
+    twist: Angle = 0.0
 
 
 class EndFittingSection(_Section):
@@ -864,7 +868,7 @@ def _stiffeners(section: HoseSection) -> tuple[Stiffeners | None, int]:
 def _clip(index: int, section: ClipSection) -> Clip:
     """The Clip of a [[clips]] table; its errors name the table."""
     try:
-        return Clip(section.type, section.point, section.arc_length, section.direction, section.name)
+        return Clip(section.type, section.point, section.arc_length, section.direction, section.name, section.twist)
     except ValueError as exc:
         raise ValueError(f"clips[{index}]: {exc}") from None
 
@@ -1230,7 +1234,7 @@ def _clip_dict(clip: Clip) -> dict[str, Any]:
     out: dict[str, Any] = {"type": clip.kind, "arc_length": float(clip.arc_length), "point": _floats(clip.point)}
     if clip.direction is not None:
         out["direction"] = _floats(clip.direction)
-    return out | ({"name": clip.name} if clip.name else {})
+    return out | ({"name": clip.name} if clip.name else {}) | ({"twist": float(clip.twist_deg)} if clip.twist_deg else {})
 
 
 def _floats(vector: np.ndarray) -> list[float]:

@@ -10,7 +10,9 @@ A clip holds the hose at `arc_length` mm from the start fitting, at `point` (mm)
 `direction` (fixed, rotating and sliding clips) is the hose's tangent through the clip, from the
 start side to the end side.  A fixed, rotating or ball clip sits on a station of the discrete
 hose: its arc length must be a whole number of segments (clip_node says which and, if not, what
-to change).
+to change).  A fixed clip's `twist_deg` turns it from the torque-free roll the placement locks it at,
+right-handed about its direction, as the end's twist turns the end fitting (in the placement's twist
+phase, procedures/placement/path.py): a bracket clamped on a hose already twisted.
 """
 
 from __future__ import annotations
@@ -31,13 +33,15 @@ ON_STATION = 1e-9  # relative to the segment length: an arc length this close to
 class Clip:
     """One clip.  kind: one of CLIP_KINDS.  point: (3,) mm.  arc_length: mm from the start fitting.
     direction: unit tangent of the hose through the clip (fixed, rotating, sliding), None for a ball
-    clip.  name: free text for reports.  For a sliding clip arc_length is the starting guess."""
+    clip.  name: free text for reports.  For a sliding clip arc_length is the starting guess.
+    twist_deg: a fixed clip's turn from its torque-free locked roll, degrees, right-handed about direction."""
 
     kind: str
     point: np.ndarray
     arc_length: float
     direction: np.ndarray | None = None
     name: str = ""
+    twist_deg: float = 0.0
 
     def __post_init__(self) -> None:
         label = f"clip {self.name!r}" if self.name else "clip"
@@ -55,6 +59,11 @@ class Clip:
             object.__setattr__(self, "direction", unit_vector(self.direction, f"{label} direction"))
         elif self.direction is not None:
             raise ValueError(f"{label}: a ball clip holds the position only: remove direction")
+        if not math.isfinite(self.twist_deg):
+            raise ValueError(f"{label}: twist = {self.twist_deg!r}: must be a finite angle in degrees")
+        if self.twist_deg != 0.0 and self.kind != "fixed":
+            raise ValueError(f"{label}: twist = {self.twist_deg:g}: only a fixed clip holds the hose's roll (a "
+                             f"{self.kind} clip lets it roll): remove twist or make the clip fixed")
 
     @property
     def holds_direction(self) -> bool:

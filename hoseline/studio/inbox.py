@@ -33,13 +33,18 @@ class Inbox:
 
     async def get(self, timeout: float | None = None) -> Target | Command | None:
         """The next message, or None when none arrived within `timeout` seconds."""
-        while not self._waiting:
-            self._arrived.clear()
+        if not self._waiting:
             try:
-                await asyncio.wait_for(self._arrived.wait(), timeout)
+                await asyncio.wait_for(self.arrival(), timeout)
             except asyncio.TimeoutError:
                 return None
         return self._waiting.popleft()
+
+    async def arrival(self) -> None:
+        """Return once a message is waiting (left in the inbox)."""
+        while not self._waiting:
+            self._arrived.clear()
+            await self._arrived.wait()
 
 
 def _merged(older: Target, newer: Target) -> Target:

@@ -15,7 +15,9 @@
 The solver runs in one worker thread, off the event loop, and every use of the session goes
 through it, one at a time.  While it works on a step, targets arriving over the WebSocket
 coalesce (inbox.py).  When nothing arrives for IDLE_SECONDS after a change, the problem is
-placed afresh and the page told whether that shape is the one shown.  Requests must come
+placed afresh and the page told whether that shape is the one shown; a message arriving meanwhile
+abandons that placement after its current continuation step (and it is made again at the next idle
+moment), so a drag never waits for it.  Requests must come
 from the page's own origin and name an allowed host (no other site can drive the studio);
 the page's Content-Security-Policy lets it load and connect to its own origin only.  Every edit
 (a gesture of the page, a file opened) keeps the session before it for undo (history.py).
@@ -33,6 +35,7 @@ import logging
 import re
 import struct
 import tempfile
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -60,6 +63,10 @@ LOCAL_HOSTS = ("127.0.0.1", "localhost")
 REFUSED = (StudioError, PlacementError, ValueError)  # a change the session refuses: told to the page, session kept
 
 
+class ComparisonAbandoned(Exception):
+    """The idle comparison was given up for a message that arrived (raised in its placements' progress callback)."""
+
+
 class Studio:
     """The server's state: the session, its worker thread, the open WebSockets, the work folder."""
 
@@ -74,6 +81,7 @@ class Studio:
         self.uploads.mkdir(parents=True, exist_ok=True)
         self.reports.mkdir(parents=True, exist_ok=True)
         self.coalesced = 0  # targets dropped for a later one, over all connections
+        self.abandoned = 0  # idle comparisons given up for a message
 
     async def run(self, function, *args):
         """function(*args) in the solver thread."""
@@ -126,7 +134,11 @@ class Studio:
                 if not waiting.done():
                     waiting.cancel()
                     break
-                await self._handle(websocket, waiting.result())
+                message = waiting.result()
+                if message is None:
+                    await self._compare_while_idle(inbox)
+                else:
+                    await self._handle(websocket, message)
                 self.coalesced = max(self.coalesced, inbox.coalesced)
         except (WebSocketDisconnect, RuntimeError):
             pass
@@ -146,11 +158,22 @@ class Studio:
             except MessageError as exc:
                 await websocket.send_text(json.dumps({"type": "error", "message": str(exc)}))
 
+    async def _compare_while_idle(self, inbox: Inbox) -> None:
+        """Compare with a fresh placement (in the solver thread) and tell every page, unless a message arrives in
+        `inbox` first: then the comparison is abandoned after its current continuation step (waited for here, so
+        that the solver thread is free for the message)."""
+        abandon = threading.Event()
+        comparing = asyncio.ensure_future(self.run(self._compare, abandon))
+        arrival = asyncio.create_task(inbox.arrival())
+        await asyncio.wait({comparing, arrival}, return_when=asyncio.FIRST_COMPLETED)
+        abandon.set()
+        arrival.cancel()
+        text = await comparing
+        if text is not None:
+            await self.broadcast(text)
+
     async def _handle(self, websocket: WebSocket, message) -> None:
-        """Solve one message (None: idle, so compare with a fresh placement) and send the outcome."""
-        if message is None:
-            await self.broadcast(await self.run(self._compare))
-            return
+        """Solve one message and send the outcome."""
         error, state, opened = await self.run(self._solve, message)
         if opened:  # undone or redone across a file opened: every page takes the other file's names and obstacles
             await self.broadcast(await self.run(self.session_text))
@@ -160,10 +183,19 @@ class Studio:
         if len(self.sockets) > 1:
             await self.broadcast(await self.run(self.state_text, None), skip=websocket)
 
-    def _compare(self) -> str:
-        """The comparison with a fresh placement (in the solver thread), as a JSON message."""
+    def _compare(self, abandon: threading.Event) -> str | None:
+        """The comparison with a fresh placement (in the solver thread), as a JSON message; None when `abandon` was
+        set before it was done (checked after every continuation step)."""
+
+        def abandoned(phase: str, fraction: float) -> None:
+            if abandon.is_set():
+                raise ComparisonAbandoned(f"abandoned in {phase} at {fraction:g}")
+
         try:
-            comparison = self.session.compare_with_placement()
+            comparison = self.session.compare_with_placement(abandoned)
+        except ComparisonAbandoned:
+            self.abandoned += 1
+            return None
         except Exception as exc:  # a bug: logged, and the page told that the comparison failed
             logging.getLogger(__name__).exception("studio: the comparison with a fresh placement failed")
             comparison = self.session.comparison = {"same": False, "failed": f"internal error ({exc})"}

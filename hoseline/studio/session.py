@@ -35,14 +35,14 @@ from hoseline.model.problem import Problem
 from hoseline.model.sweep import DEFAULT_CLEARANCE, Obstacle, SweepProblem
 from hoseline.procedures.geometry.clearance import TriangleIndex
 from hoseline.procedures.geometry.contact_shapes import SOURCE as CONTACT_SOURCE, contact_meshes
-from hoseline.procedures.placement.continuation import PlacementError
+from hoseline.procedures.placement.continuation import PlacementError, Progress
 from hoseline.procedures.placement.result import Result
 from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.tracking import Fittings, Step, Tracker, twisted
 from hoseline.studio.comparison import placement_comparison
 from hoseline.studio.messages import HoseTarget, Target
 from hoseline.studio.ports import PortAnchor, piece_outline
-from hoseline.studio.saving import saved_twist
+from hoseline.studio.saving import saved_problem, saved_twists
 
 
 MAX_TWIST_STEP = 90.0  # degrees of twist per step of continuation (a frame cannot tell 270 from -90)
@@ -224,21 +224,24 @@ class Session:
         return Step(sum(s.iterations for s in steps), sum(s.seconds for s in steps),
                     [event for s in steps for event in s.events], movement)
 
-    def compare_with_placement(self) -> dict:
-        """Place the current problem afresh and say how far that shape is from the one shown (idle work)."""
+    def compare_with_placement(self, progress: Progress | None = None) -> dict:
+        """Place the current problem afresh and say how far that shape is from the one shown (idle work).
+
+        progress: called after each continuation step of the placements (continuation.Progress); an exception it
+        raises abandons the comparison (nothing kept) and comes out of here."""
         if self.comparison is None:
             try:
-                self.comparison = self._compared(solve(self.problem))
+                self.comparison = self._compared(solve(self.problem, progress=progress), progress)
             except PlacementError as exc:
                 self.comparison = {"same": False, "failed": str(exc)}
         return self.comparison
 
-    def _compared(self, fresh: Result) -> dict:
+    def _compared(self, fresh: Result, progress: Progress | None = None) -> dict:
         """The comparison of the shape shown with `fresh`, a fresh placement of the problem (view.placement_comparison),
-        and, as "saved", with the problem file as saved (saving.saved_twist: its twist at assembly and how far its
+        and, as "saved", with the problem file as saved (saving.saved_twists: its twists at assembly and how far its
         fresh placement is from the shape shown)."""
         comparison = placement_comparison(self.tracker.centerline, self.end_frame, fresh)
-        comparison["saved"] = saved_twist(self.problem, self.tracker.fittings, fresh, self.tracker.centerline)
+        comparison["saved"] = saved_twists(self.problem, self.tracker.fittings, fresh, self.tracker.centerline, progress)
         return comparison
 
     @property
@@ -281,13 +284,15 @@ class Session:
         return self.tracker.result(self.placement.lock_angle_deg)
 
     def problem_toml(self, assembled: bool = False) -> str:
-        """The problem as a problem file (mounts and hose as now): with the twist at assembly that places it as shown
-        (saving.saved_twist, found by a fresh placement if none was made since the last change; the twist as set
-        when no fresh placement can be made), or, `assembled`, with the twist as set (the shape "Place again" gives)."""
+        """The problem as a problem file (mounts and hose as now): with the twists at assembly (the end's, each fixed
+        clip's) that place it as shown (saving.saved_twists, found by a fresh placement if none was made since the last
+        change; the twists as set when no fresh placement can be made), or, `assembled`, with the twists as set (the
+        shape "Place again" gives)."""
         if assembled:
             return problem_to_toml(self.problem)
         saved = self.compare_with_placement().get("saved")
-        return problem_to_toml(self.problem if saved is None else replace(self.problem, end_twist_deg=saved["twist"]))
+        return problem_to_toml(self.problem if saved is None
+                               else saved_problem(self.problem, saved["twist"], saved["clip_twists"]))
 
     def sweep_to_run(self) -> SweepProblem:
         """The open sweep with the hose and twist as now, at the sweep's design mounts."""

@@ -49,14 +49,16 @@ class PlacementPath:
     """The clamps along the placement of one problem: the place phase and the twisted end.
 
     place(t): t in [0, 1] carries the end of the straight hose onto the end mount (roll free,
-    weight ramped in).  twisted(locked_frame, twist_deg): the end fitting at the end mount,
-    turned by twist_deg degrees about end.direction from the locked frame (roll clamped).
+    weight ramped in).  twisted(locked_frame, twist_deg, clips, share): the end fitting at the end
+    mount, turned by twist_deg degrees about end.direction from the locked frame (roll clamped), and
+    each fixed clip turned by `share` of its own twist (Clip.twist_deg) from its locked roll.
 
     Clips: in the place phase every clip's station travels along a straight line from where it
     sits on the straight hose to the clip point, and a clip that holds the direction turns its
     frame from the start frame into the clip direction (about their cross product), roll free.
     After the place phase the roll of fixed clips is locked at the torque-free angle found
-    (locked_clips); rotating and sliding clips stay free to roll.  A sliding clip starts at the
+    (locked_clips) and, in the twist phase, turned by its twist from there; rotating and sliding
+    clips stay free to roll.  A sliding clip starts at the
     station nearest its arc_length and the hose slides through it all along the path (its arc
     length is an unknown of every solve).
     """
@@ -116,8 +118,16 @@ class PlacementPath:
             clips.append(hold)
         return tuple(clips), free_rolls
 
-    def twisted(self, locked_frame: np.ndarray, twist_deg: float, clips: tuple[ClipHold, ...] = ()) -> Clamps:
-        """Clamps with the end fitting turned by twist_deg (degrees) from locked_frame; clips as locked."""
+    def twisted(self, locked_frame: np.ndarray, twist_deg: float, clips: tuple[ClipHold, ...] = (),
+                share: float = 1.0) -> Clamps:
+        """Clamps with the end fitting turned by twist_deg (degrees) from locked_frame; `clips` as locked
+        (locked_clips), each fixed clip turned by `share` (0 to 1, the twist phase's fraction) of its twist about
+        its d3."""
+        clips = tuple(
+            replace(hold, frame=hold.frame @ rotation_matrix(hold.frame[2] * (share * math.radians(clip.twist_deg))).T)
+            if clip.twist_deg else hold
+            for clip, hold in zip(self.problem.clips, clips)
+        )
         return Clamps(
             start_point=self.problem.start.point,
             start_frame=self.start_frame,

@@ -57,9 +57,9 @@ class ClipReaction:
     its axis (the hose rolls freely in it); a ball clip carries a force only.  A sliding clip's
     arc_length is the one the solve found.  frame: (3, 3) the clip frame as it holds the hose
     (rows d1, d2, d3 in world components; d3 along the hose, the roll found included), None for a
-    ball clip.  locked_roll_deg: a fixed clip's roll at which the placement locked it, degrees
-    (right-handed about the clip direction, from the clip frame the place phase carries the start
-    fitting's frame to: see placement/path.PlacementPath); None for the other kinds."""
+    ball clip.  locked_roll_deg: a fixed clip's roll at which the placement holds it (the torque-free roll it
+    locked it at, plus the clip's twist), degrees (right-handed about the clip direction, from the clip frame the
+    place phase carries the start fitting's frame to: see placement/path.PlacementPath); None for the other kinds."""
 
     kind: str
     name: str

@@ -176,7 +176,7 @@ def solve(
         if coarse_count < props.segments and narrowed_report.converged:
             try:
                 coarse = solve(replace(problem, hose=replace(problem.hose, segments=coarse_count)), control=control,
-                               estimate_error=False)
+                               estimate_error=False, progress=progress)
             except PlacementError as error:
                 result.events.append(f"accuracy: the placement with {coarse_count} segments failed: {error}")
         if coarse is None or _coarse_clamps(final, state, props.segments, coarse_count, props.length) is None:
@@ -416,14 +416,15 @@ class _Sequence:
             raise ValueError(f"the placement cannot be resumed in phase {phase!r}")
 
         def twist_path(t: float) -> Clamps:
-            return self.path.twisted(locked_frame, twist_deg * t, locked_clips)
+            return self.path.twisted(locked_frame, twist_deg * t, locked_clips, t)
 
-        twist = math.radians(twist_deg)
+        # the largest turn of the phase: the end's, or a fixed clip's (turned along with it)
+        twist = math.radians(max([abs(twist_deg)] + [abs(clip.twist_deg) for clip in problem.clips]))
         if twist != 0.0 and fraction < 1.0:
             twist_control = replace(  # steps of at most 30 deg at first, 45 deg later
                 control,
-                first=min(control.first, math.radians(30.0) / abs(twist)),
-                largest=min(control.largest, math.radians(45.0) / abs(twist)),
+                first=min(control.first, math.radians(30.0) / twist),
+                largest=min(control.largest, math.radians(45.0) / twist),
             )
             state = self._follow("twist", twist_path, props, state, log, fraction, twist_control)
         final = twist_path(1.0)

@@ -134,7 +134,8 @@ def clip_reactions(problem: Problem, props: RodProperties, clamps: Clamps, state
 def locked_clip_rolls(problem: Problem, clamps: Clamps) -> list[float | None]:
     """The roll (degrees, right-handed about the clip direction) at which `clamps` hold each fixed clip, measured
     from the frame the place phase carries the clip to with its roll free (PlacementPath.place(1)); None for
-    the other kinds.  The placement locks a fixed clip at the torque-free roll of the end of the place phase."""
+    the other kinds.  The placement locks a fixed clip at the torque-free roll of the end of the place phase and
+    turns it by the clip's twist from there."""
     carried = PlacementPath(problem).place(1.0).clips
     return [
         math.degrees(math.atan2(float(held.frame[0] @ free.frame[1]), float(held.frame[0] @ free.frame[0])))

@@ -41,6 +41,8 @@ const panel = new Panel({
 });
 const busy = new Busy(view);
 const connection = new Connection(receive, () => panel.message('the studio server has stopped: start it again and reload', true));
+studioScene.awaitedUntil = () => connection.awaitedUntil;  // a frame due while a target is answered waits for it
+studioScene.streaming = () => connection.streaming;  // a drag at the frames' rate: drawn at the frames
 fittings.afterDrag = () => { if (state && !connection.waiting) fittings.place(state.fittings, state.clips); };
 const toolbar = view.querySelector('.toolbar');
 const edits = new EditHistory(send, toolbar);

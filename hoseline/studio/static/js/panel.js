@@ -263,8 +263,11 @@ export class Panel {
       const why = comparison.clocking > 1e-6
         ? `the end fitting is clocked ${fmt(comparison.clocking, 3)}° from where a fresh assembly locks it: the hose was moved after assembly (it keeps its locked twist). "Place again" assembles it here.`
         : 'same fittings, another shape: the path reached another branch. "Place again" gives the placement\'s branch.';
+      const clipTwists = (saved && saved.clip_twists || []).map((twist, k) => [k, twist]).filter(([, twist]) => twist !== 0)
+        .map(([k, twist]) => `clip ${k + 1} ${signed(twist)}`);
+      const clipsSaved = clipTwists.length ? ` Each fixed clip's twist too: ${clipTwists.join(', ')}.` : '';
       const file = !saved ? ''
-        : saved.same ? ` The saved file holds the twist at assembly that places the hose as shown: ${fmt(saved.twist)}° (${signed(saved.twist_change)} on the twist as set; its fresh placement is ${fmt(saved.distance, 2)} mm from the shape shown).`
+        : saved.same ? ` The saved file holds the twist at assembly that places the hose as shown: ${fmt(saved.twist)}° (${signed(saved.twist_change)} on the twist as set; its fresh placement is ${fmt(saved.distance, 2)} mm from the shape shown).${clipsSaved}`
           : ` No twist at assembly reproduces the shape shown (${saved.failed ? `the fresh placement with ${fmt(saved.twist)}° fails` : `the nearest, ${fmt(saved.twist)}° (${signed(saved.twist_change)}), places it ${fmt(saved.distance, 3)} mm off`}): "Save" asks which to keep.`;
       if (saved && saved.same) badge.textContent += `; saved as shown (twist ${signed(saved.twist_change)})`;
       badge.title = why + file;

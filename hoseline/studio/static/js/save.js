@@ -1,6 +1,6 @@
 // Saving the problem file.  The file the studio writes solves to the shape shown (hoseline/studio/saving.py: the end
-// fitting's twist at assembly that a fresh placement needs, checked by placing it).  Where that check fails (a hose
-// that is not round with its start fitting turned, a fixed clip's locked roll, another branch) the user chooses:
+// fitting's and each fixed clip's twist at assembly that a fresh placement needs, checked by placing it).  Where that
+// check fails (a hose that is not round with its start fitting turned, another branch) the user chooses:
 // "as moved" (that twist, solving as close to the shape shown as the file can) or "re-assembled" (the twist as set:
 // the shape "Place again" gives).
 

@@ -1,10 +1,17 @@
 // The 3D view: renderer, camera (z up, as the problem files' gravity), orbit/pan/zoom, a ground
-// grid and axes, view presets.  It draws on demand (after a change), not in a loop, and at most once an
-// animation frame: requestRender() marks the view dirty and the next frame draws it, however many changes
-// came before it (a drag's events, the states answering them, the orbit's moves).
+// grid and axes, view presets.  It draws on demand (after a change), not in a loop: requestRender() marks the
+// view dirty and one drawing draws it, however many changes came before it (a drag's events, the states
+// answering them, the orbit's moves).  Without a GPU a drawing takes the CPU for 10 ms or more, and drawn just
+// after a drag's target was sent it held up the answer.  So the view is drawn at once (when the caller's task
+// is done) while no answer from the server is awaited nor another target expected within a frame (streaming: a
+// drag at the rate of the frames), and the last drawing is MIN_INTERVAL_MS old; else at the next animation frame,
+// and a frame due while an answer is expected soon (awaitedUntil) waits for it, at most until then, and is drawn
+// as soon as it comes: one drawing shows the answer, taken in at once.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { StaticLayer } from './static_layer.js';
+
+const MIN_INTERVAL_MS = 8;  // between drawings made at once, outside the animation frames (half a frame at 60 Hz)
 
 const PRESETS = {
   iso: new THREE.Vector3(1, -1, 0.8),
@@ -45,6 +52,10 @@ export class StudioScene {
     this.dirty = false;
     this.drawnCallbacks = [];  // called with performance.now() once the next frame is drawn
     this.later = null;  // the timer of requestRenderAfter
+    this.held = null;  // the timer of a frame held for an awaited answer
+    this.drawnAt = -Infinity;  // performance.now() of the last drawing
+    this.awaitedUntil = () => null;  // performance.now() until which a frame waits for an answer (null: none awaited)
+    this.streaming = () => false;  // whether targets go to the server at about the rate of the frames
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
   }
@@ -58,15 +69,39 @@ export class StudioScene {
     this.requestRender();
   }
 
-  /** Draw at the next animation frame (once, however often asked before it); then(performance.now()) is
-   * called when that frame has been drawn. */
+  /** Draw once, however often asked before it: at once (when the caller's task is done) where a frame was held
+   * for an answer, or where none is awaited nor streaming and the last drawing is MIN_INTERVAL_MS old; else at the
+   * next animation frame.  then(performance.now()) is called when it has been drawn. */
   requestRender(then) {
     if (then) this.drawnCallbacks.push(then);
     clearTimeout(this.later);
     this.later = null;
+    if (this.held !== null) {
+      clearTimeout(this.held);
+      this.held = null;
+      this.renderSoon();
+      return;
+    }
     if (this.dirty) return;
     this.dirty = true;
-    requestAnimationFrame(() => this.render());
+    if (this.awaitedUntil() === null && !this.streaming() && performance.now() - this.drawnAt >= MIN_INTERVAL_MS) {
+      this.renderSoon();
+      return;
+    }
+    requestAnimationFrame(() => this.frame());
+  }
+
+  /** Draw when the caller's task is done, unless drawn before then. */
+  renderSoon() {
+    queueMicrotask(() => { if (this.dirty) this.render(); });
+  }
+
+  /** An animation frame: draw, or hold the drawing until the answer awaited comes (requestRender) or is late. */
+  frame() {
+    if (!this.dirty || this.held !== null) return;  // drawn at once meanwhile, or held already
+    const until = this.awaitedUntil(), now = performance.now();
+    if (until === null || until <= now) { this.render(); return; }
+    this.held = setTimeout(() => { this.held = null; this.render(); }, until - now);
   }
 
   /** Draw in `ms` milliseconds, unless a frame is asked for before then (which draws this change too). */
@@ -80,7 +115,7 @@ export class StudioScene {
     if (this.layer) this.layer.render(this.renderer, this.scene, this.camera);
     else this.renderer.render(this.scene, this.camera);
     this.drawCount += 1;
-    const drawnAt = performance.now(), callbacks = this.drawnCallbacks;
+    const drawnAt = this.drawnAt = performance.now(), callbacks = this.drawnCallbacks;
     this.drawnCallbacks = [];
     for (const then of callbacks) then(drawnAt);
   }
