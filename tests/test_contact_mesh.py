@@ -563,9 +563,10 @@ def test_mesh_pairs_come_in_the_order_of_their_stations_and_segments():
 
 
 def test_the_smallest_gap_to_a_mesh_is_that_of_the_nearest_triangle_of_every_segment():
-    """MeshArrays.smallest_gaps (a bound grown until a segment is below it) against segment_gaps with no bound (the
-    nearest triangle of every segment), for a hose touching the drum, near it, and far from it; and per-segment bounds
-    of segment_gaps: the exact gap below each segment's own bound, the bound where the mesh is farther."""
+    """MeshArrays.smallest_gaps (the segments nearest the mesh's box searched first, their gap the bound of the
+    search of all) against segment_gaps with no bound (the nearest triangle of every segment), for a hose touching
+    the drum, near it, and far from it; with `within`, the same where the gap is below it, else inf; and per-segment
+    bounds of segment_gaps: the exact gap below each segment's own bound, the bound where the mesh is farther."""
     rng = np.random.default_rng(4)
     vertices, faces = _faceted_drum(24, rows=6)
     mesh = pack_meshes([(vertices, faces)], [0])
@@ -573,7 +574,11 @@ def test_the_smallest_gap_to_a_mesh_is_that_of_the_nearest_triangle_of_every_seg
     for lift in (0.0, 3.0, 300.0):
         moved = nodes + [0.0, 0.0, lift]
         every = mesh.segment_gaps(moved[:-1], moved[1:], 1.0, np.inf)[0]
-        assert mesh.smallest_gaps(moved[:-1], moved[1:], 1.0, 0.01) == pytest.approx(np.min(every, axis=1), abs=1e-12)
+        assert mesh.smallest_gaps(moved[:-1], moved[1:], 1.0) == pytest.approx(np.min(every, axis=1), abs=1e-12)
+        smallest = float(np.min(every))
+        for within in (0.5 * smallest, 2.0 * smallest):
+            expected = smallest if smallest < within else np.inf
+            assert mesh.smallest_gaps(moved[:-1], moved[1:], 1.0, within)[0] == pytest.approx(expected, abs=1e-12)
         bounds = np.linspace(0.0, 2.0 * float(np.max(every)), moved.shape[0] - 1)
         bounded, nearest = mesh.segment_gaps(moved[:-1], moved[1:], 1.0, bounds)
         below = every[0] < bounds

@@ -150,10 +150,11 @@ class ContactModel:
                         f"by {-mesh_gaps[mesh, segment]:.4g} mm (segment-triangle)")
         return None
 
-    def smallest_gaps(self, nodes: np.ndarray) -> dict[str, float]:
-        """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to each obstacle (and "self")."""
+    def smallest_gaps(self, nodes: np.ndarray, within: float = math.inf) -> dict[str, float]:
+        """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to each obstacle (and "self");
+        a mesh farther than `within` mm may be given as inf (MeshArrays.smallest_gaps)."""
         smallest = {name: math.inf for name in self.names} | ({"self": math.inf} if self.self_exclusion >= 0 else {})
-        (kinds, second, gaps), mesh_gaps, itself = self._all_gaps(nodes)
+        (kinds, second, gaps), mesh_gaps, itself = self._all_gaps(nodes, within)
         if self.self_exclusion >= 0:
             smallest["self"] = itself
         for kind, owners in zip((STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE),
@@ -172,13 +173,13 @@ class ContactModel:
         (_, _, gaps), mesh_gaps, itself = self._all_gaps(nodes)
         return float(min(np.min(gaps, initial=math.inf), np.min(mesh_gaps, initial=math.inf), itself))
 
-    def _all_gaps(self, nodes: np.ndarray):
-        """((kinds, second, gaps) of every analytic obstacle's pair, the smallest gap (K,) to each mesh, the smallest
-        self-contact gap (inf without self-contact))."""
+    def _all_gaps(self, nodes: np.ndarray, within: float = math.inf):
+        """((kinds, second, gaps) of every analytic obstacle's pair, the smallest gap (K,) to each mesh (inf farther
+        than `within` mm), the smallest self-contact gap (inf without self-contact))."""
         no_self = -1
         kinds, _, second, gaps = pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, no_self,
                                            math.inf)
-        mesh_gaps = self.mesh.smallest_gaps(nodes[:-1], nodes[1:], self.hose_radius, self.activation)
+        mesh_gaps = self.mesh.smallest_gaps(nodes[:-1], nodes[1:], self.hose_radius, within)
         return (kinds, second, gaps), mesh_gaps, self._smallest_self_gap(nodes)
 
     def _smallest_self_gap(self, nodes: np.ndarray) -> float:

@@ -169,13 +169,14 @@ def entry_travel(alone: ContactModel, obstacle: Obstacle, pieces: Sequence[np.nd
     return math.inf
 
 
-def _gap(alone: ContactModel, nodes: np.ndarray) -> float:
-    """The smallest gap (mm) of the capsules of the hose radius along `nodes` (mm) to the one obstacle of `alone`.
+def _gap(alone: ContactModel, nodes: np.ndarray, within: float = math.inf) -> float:
+    """The smallest gap (mm) of the capsules of the hose radius along `nodes` (mm) to the one obstacle of `alone`;
+    a mesh farther than `within` mm may give inf (whether the hose is that near, not how far it is).
 
     The first node is counted against planes too (the solver's station-plane pairs leave out station 0, the clamped
     start point)."""
     first = (nodes[0] - alone.planes[:, :3]) @ alone.planes[:, 3:].T if alone.planes.size else np.zeros((0, 0))
-    return float(min([*alone.smallest_gaps(nodes).values(), *(np.diagonal(first) - alone.hose_radius)]))
+    return float(min([*alone.smallest_gaps(nodes, within).values(), *(np.diagonal(first) - alone.hose_radius)]))
 
 
 def held_pieces(clamps: Clamps, radius: float) -> list[np.ndarray]:
@@ -202,7 +203,8 @@ def choose_entry(alone: ContactModel, obstacle: Obstacle, nodes: np.ndarray, hel
     for side in ordered:
         if any(side @ other >= HINT_COSINE for other in avoid):
             continue
-        if best is not None and _gap(alone, nodes + best.travel * side) < 0.5 * START_CLEARANCE * alone.hose_radius:
+        near = 0.5 * START_CLEARANCE * alone.hose_radius
+        if best is not None and _gap(alone, nodes + best.travel * side, near) < near:
             continue  # it still touches the hose as far back as the best way starts: this way is no shorter
         travel = entry_travel(alone, obstacle, [nodes], side)
         if best is not None and travel >= best.travel:
