@@ -20,6 +20,10 @@ from hoseline.mechanics.contact_motion import only
 from hoseline.mechanics.contact_newton import ContactModel
 from hoseline.model.problem import Problem
 
+SEARCHED_BEYOND = 1e-6  # hose radii past the smallest gap that the halving's mesh searches look (rounding: the halves'
+# gaps are the chain's to the last bits, but need not be found in the same order)
+
+
 @dataclass(frozen=True)
 class NearestGap:
     """The smallest gap (mm, surface to surface; negative where a fitting enters the obstacle) of one piece of the
@@ -62,10 +66,10 @@ def nearest_gaps(problem: Problem, model: ContactModel, nodes: np.ndarray) -> di
     return nearest
 
 
-def _chain_gaps(model: ContactModel, points: np.ndarray) -> dict[str, float]:
+def _chain_gaps(model: ContactModel, points: np.ndarray, within: float = math.inf) -> dict[str, float]:
     """The smallest gap (mm) of the chain of capsules of the hose radius through `points` (K, 3) to each obstacle,
-    its first point included (the model's plane pairs leave it out)."""
-    gaps = model.smallest_gaps(points)
+    its first point included (the model's plane pairs leave it out); inf for a mesh farther than `within` mm."""
+    gaps = model.smallest_gaps(points, within)
     for row, owner in zip(model.planes, model.owners_planes):
         name = model.names[int(owner)]
         gaps[name] = min(gaps[name], float(np.dot(points[0] - row[:3], row[3:])) - model.hose_radius)
@@ -74,12 +78,15 @@ def _chain_gaps(model: ContactModel, points: np.ndarray) -> dict[str, float]:
 
 def _nearest_segment(alone: ContactModel, points: np.ndarray, smallest: float) -> int:
     """The index of the segment of the chain through `points` nearest the one obstacle of `alone` (no self-contact),
-    whose smallest gap (mm, as _chain_gaps) is `smallest`, by halving: the nearer half is the first where its gap
-    is the chain's (the halves share a station and split the segments, so the chain's is the smaller of theirs)."""
+    whose smallest gap (mm, as _chain_gaps) is `smallest`, by halving: the nearer half (the first of equal ones) is
+    kept.  A mesh is searched only within a hair (SEARCHED_BEYOND hose radii) of that gap: a half farther off gives
+    inf, at a fraction of the cost of its own gap, and the one that holds it its exact gap."""
     first, last = 0, len(points) - 1
+    within = smallest + SEARCHED_BEYOND * alone.hose_radius
     while last - first > 1:
         middle = (first + last) // 2
-        if min(_chain_gaps(alone, points[first:middle + 1]).values()) <= smallest:
+        if (min(_chain_gaps(alone, points[first:middle + 1], within).values())
+                <= min(_chain_gaps(alone, points[middle:last + 1], within).values())):
             last = middle
         else:
             first = middle
