@@ -240,22 +240,30 @@ class MeshArrays:
         tree, roots = self._tree(search)
         return _leaves_in_order(starts, ends, reaches, *tree, roots)
 
-    def smallest_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float, within: float = math.inf,
-                      beyond: float = math.inf) -> np.ndarray:
+    def smallest_gaps(self, starts: np.ndarray, ends: np.ndarray, hose_radius: float, first_bound: float,
+                      within: float = math.inf, beyond: float = math.inf) -> np.ndarray:
         """(K,) the smallest gap (mm) of the capsules of `hose_radius` about the segments from `starts` to `ends` to
         each mesh; inf for a mesh farther than `within` mm (whether something is that near, not how far), and for a
         mesh whose lower bound (below) is at least `beyond` mm, that bound (a sphere trace from afar steps safely by
         it: the exact gap of a fine mesh tens of mm off costs 0.5 to 1.5 ms, 100 000 triangles).
 
-        Far cheaper than the nearest triangle of every segment: each segment's gap is bounded from below by that of
-        its own box to the first BOUNDING_BOXES boxes of the mesh's tree (no triangle opened); the PROBES_PER_MESH
-        segments of the lowest bounds are searched with no bound, and the smallest gap they reach bounds the search
-        of the segments whose own bound lies below it.  (A bound grown eightfold from d_hat searched every segment
-        within up to 8 times the gap; probes chosen by the root's box alone, which holds most of a hose wrapped on a
-        strut, reached 5 to 8 times the gap.)"""
+        First every segment is searched below `first_bound` mm (d_hat: a hose in contact is done, 0.2 ms on the
+        strut of bench_contact_placement.py --mesh).  For a mesh farther off, each segment's gap is bounded from below
+        by that of its own box to the first BOUNDING_BOXES boxes of the mesh's tree (no triangle opened); the
+        PROBES_PER_MESH segments of the lowest bounds are searched with no bound, and the smallest gap they reach
+        bounds the search of the segments whose own bound lies below it.  (A bound grown eightfold from d_hat
+        searched every segment within up to 8 times the gap; probes chosen by the root's box alone, which holds most
+        of a hose wrapped on a strut, reached 5 to 8 times the gap.)"""
         smallest = np.full(self.count, np.inf)
         wanted = self.triangle_roots >= 0  # (a mesh left out has no tree: inf)
         if starts.shape[0] == 0 or not np.any(wanted):
+            return smallest
+        first = min(float(first_bound), within)
+        gaps, nearest = self.segment_gaps(starts, ends, hose_radius, first)
+        found = wanted & np.any(nearest >= 0, axis=1)
+        smallest[found] = np.min(np.where(nearest >= 0, gaps, np.inf), axis=1)[found]
+        wanted &= ~found
+        if not np.any(wanted) or first >= within:
             return smallest
         bounds = self._segment_bounds(starts, ends, hose_radius)  # (K, n) mm
         far = wanted & (np.min(bounds, axis=1) >= beyond)

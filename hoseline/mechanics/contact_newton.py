@@ -181,7 +181,7 @@ class ContactModel:
         no_self = -1
         kinds, _, second, gaps = pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, no_self,
                                            math.inf)
-        mesh_gaps = self.mesh.smallest_gaps(nodes[:-1], nodes[1:], self.hose_radius, within, beyond)
+        mesh_gaps = self.mesh.smallest_gaps(nodes[:-1], nodes[1:], self.hose_radius, self.activation, within, beyond)
         return (kinds, second, gaps), mesh_gaps, self._smallest_self_gap(nodes)
 
     def _smallest_self_gap(self, nodes: np.ndarray) -> float:
