@@ -193,6 +193,23 @@ def test_the_watch_looks_ahead_where_the_determinant_falls_towards_zero(monkeypa
     assert watch.ahead(0.6, 0.15) == 0.15 and asked and watch.aim is None  # first seen in the step's first half: left
 
 
+def test_the_watch_asks_again_only_where_the_determinant_falls_faster_than_where_no_fold_was_near(monkeypatch):
+    """Once the eigenvalues saw no fold near (a fold far beyond the step: the determinant fell as a contact let go),
+    the watch does not ask them again on the branch while log |det| falls no faster per unit of the path; where it
+    falls faster (towards a fold its fall steepens without end) it asks, and steps towards the fold it sees."""
+    falls = {0.5: 100.0, 0.55: 99.0, 0.6: 98.5, 0.62: 97.5, 0.64: 92.0}  # log |det| at each fraction
+    watch, asked = _watch(monkeypatch, _square_root_fold(0.7), (0.5, 0.55), bisecting=False, log_det=falls.get)
+    assert watch.ahead(0.55, 0.05) == 0.05 and asked and watch.calm == pytest.approx(20.0)  # 0.7 is beyond 0.6
+    asked.clear()
+    watch.add(0.6, None, 0.6, None, falls[0.6])  # falling 10 per unit: slower than where no fold was near
+    assert watch.ahead(0.6, 0.02) == 0.02 and not asked
+    watch.add(0.62, None, 0.62, None, falls[0.62])  # 50 per unit, faster: asked, and the fold at 0.7 lies beyond
+    assert watch.ahead(0.62, 0.02) == 0.02 and asked and watch.calm == pytest.approx(50.0)
+    asked.clear()
+    watch.add(0.64, None, 0.64, None, falls[0.64])  # 275 per unit: asked, and the fold is in the next step's later half
+    assert watch.ahead(0.64, 0.08) == pytest.approx(APPROACH * (watch.fold() - 0.64)) and asked and watch.calm is None
+
+
 def test_the_watch_asks_the_eigenvalues_at_the_first_step_after_a_snap(monkeypatch):
     """A branch that starts at a snap (its start's determinant unknown) asks the eigenvalues after its first, short
     step: the plectoneme's second fold lies 0.006 of its phase past the first."""

@@ -563,9 +563,12 @@ def test_mesh_pairs_come_in_the_order_of_their_stations_and_segments():
 
 
 def test_the_smallest_gap_to_a_mesh_is_that_of_the_nearest_triangle_of_every_segment():
-    """MeshArrays.smallest_gaps (a bound grown until a segment is below it) against segment_gaps with no bound (the
-    nearest triangle of every segment), for a hose touching the drum, near it, and far from it; and per-segment bounds
-    of segment_gaps: the exact gap below each segment's own bound, the bound where the mesh is farther."""
+    """MeshArrays.smallest_gaps (every segment below a first bound, then the segments of the lowest box bounds searched
+    first, their gap the bound of the search of the others) against segment_gaps with no bound (the nearest triangle
+    of every segment), for a hose touching the drum, near it, and far from it; with `within`, the same where the gap
+    is below it, else inf; with `beyond`, a lower bound where that is at least `beyond` (close to the gap far off),
+    else the gap; and per-segment bounds of segment_gaps: the exact gap below each segment's own bound, the bound
+    where the mesh is farther."""
     rng = np.random.default_rng(4)
     vertices, faces = _faceted_drum(24, rows=6)
     mesh = pack_meshes([(vertices, faces)], [0])
@@ -574,6 +577,14 @@ def test_the_smallest_gap_to_a_mesh_is_that_of_the_nearest_triangle_of_every_seg
         moved = nodes + [0.0, 0.0, lift]
         every = mesh.segment_gaps(moved[:-1], moved[1:], 1.0, np.inf)[0]
         assert mesh.smallest_gaps(moved[:-1], moved[1:], 1.0, 0.01) == pytest.approx(np.min(every, axis=1), abs=1e-12)
+        smallest = float(np.min(every))
+        for within in (0.5 * smallest, 2.0 * smallest):
+            expected = smallest if smallest < within else np.inf
+            assert mesh.smallest_gaps(moved[:-1], moved[1:], 1.0, 0.01, within)[0] == pytest.approx(expected, abs=1e-12)
+        bounded = mesh.smallest_gaps(moved[:-1], moved[1:], 1.0, 0.01, beyond=1.0)[0]  # a lower bound where >= 1 mm
+        assert bounded <= smallest + 1e-12 and (bounded >= 1.0 or bounded == pytest.approx(smallest, abs=1e-12))
+        if lift == 300.0:  # far off: the bound, near the gap
+            assert 1.0 <= bounded < smallest and bounded > 0.8 * smallest
         bounds = np.linspace(0.0, 2.0 * float(np.max(every)), moved.shape[0] - 1)
         bounded, nearest = mesh.segment_gaps(moved[:-1], moved[1:], 1.0, bounds)
         below = every[0] < bounds

@@ -150,10 +150,12 @@ class ContactModel:
                         f"by {-mesh_gaps[mesh, segment]:.4g} mm (segment-triangle)")
         return None
 
-    def smallest_gaps(self, nodes: np.ndarray) -> dict[str, float]:
-        """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to each obstacle (and "self")."""
+    def smallest_gaps(self, nodes: np.ndarray, within: float = math.inf, beyond: float = math.inf) -> dict[str, float]:
+        """The smallest gap (mm, surface to surface) of the hose with centreline `nodes` to each obstacle (and "self");
+        for a mesh farther than `within` mm inf, and one bounded below by at least `beyond` mm that bound
+        (MeshArrays.smallest_gaps)."""
         smallest = {name: math.inf for name in self.names} | ({"self": math.inf} if self.self_exclusion >= 0 else {})
-        (kinds, second, gaps), mesh_gaps, itself = self._all_gaps(nodes)
+        (kinds, second, gaps), mesh_gaps, itself = self._all_gaps(nodes, within, beyond)
         if self.self_exclusion >= 0:
             smallest["self"] = itself
         for kind, owners in zip((STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE),
@@ -172,13 +174,14 @@ class ContactModel:
         (_, _, gaps), mesh_gaps, itself = self._all_gaps(nodes)
         return float(min(np.min(gaps, initial=math.inf), np.min(mesh_gaps, initial=math.inf), itself))
 
-    def _all_gaps(self, nodes: np.ndarray):
-        """((kinds, second, gaps) of every analytic obstacle's pair, the smallest gap (K,) to each mesh, the smallest
-        self-contact gap (inf without self-contact))."""
+    def _all_gaps(self, nodes: np.ndarray, within: float = math.inf, beyond: float = math.inf):
+        """((kinds, second, gaps) of every analytic obstacle's pair, the smallest gap (K,) to each mesh (inf farther
+        than `within` mm, a lower bound where that is at least `beyond` mm), the smallest self-contact gap (inf
+        without self-contact))."""
         no_self = -1
         kinds, _, second, gaps = pair_gaps(nodes, self.hose_radius, self.planes, self.balls, self.capsules, no_self,
                                            math.inf)
-        mesh_gaps = self.mesh.smallest_gaps(nodes[:-1], nodes[1:], self.hose_radius, self.activation)
+        mesh_gaps = self.mesh.smallest_gaps(nodes[:-1], nodes[1:], self.hose_radius, self.activation, within, beyond)
         return (kinds, second, gaps), mesh_gaps, self._smallest_self_gap(nodes)
 
     def _smallest_self_gap(self, nodes: np.ndarray) -> float:
@@ -655,25 +658,61 @@ def lowest_stiffnesses(system: ContactSystem, count: int) -> np.ndarray:
     """The `count` lowest eigenvalues (N*mm/rad^2, ascending) of the Hessian on the constraint tangent space that are
     not neutral: an eigenvalue within NEUTRAL of the largest magnitude is the zero mode of a symmetry (the whole hose
     turned about the axis of coaxial mounts, as the plectoneme's) and says nothing of a fold.  Fewer where the tangent
-    space has fewer.  Dense, O(n^3), for the fold watch of procedures/contact/continuation.py: the tangent space is
-    taken by the m Householder reflectors of J's QR applied to both sides (O(m n^2); null_space and two products
-    took 40 % of 0.9 ms for 50 segments), unless J is rank deficient.  One BLAS thread, as solve_with_contact."""
+    space has fewer.  Dense, O(n^3), for the fold watch of procedures/contact/continuation.py.  One BLAS thread, as
+    solve_with_contact."""
     with one_blas_thread():
-        hess, jac_t = system.dense(), system.jac_t
-        m = jac_t.shape[1]
-        if m:
-            reflectors, tau, _, _ = scipy.linalg.lapack.dgeqrf(jac_t)
-            pivots = np.abs(np.diag(reflectors[:m]))
-            if np.min(pivots) > 1e-12 * np.max(pivots):  # Q^T H Q, Q = [range J, null J^T]: its lower right block
-                work = 64 * hess.shape[0]
-                hess = scipy.linalg.lapack.dormqr("L", "T", reflectors, tau, hess, work)[0]
-                hess = scipy.linalg.lapack.dormqr("R", "N", reflectors, tau, hess, work)[0][m:, m:]
-            else:
-                basis = scipy.linalg.null_space(jac_t.T)
-                hess = basis.T @ hess @ basis
-        values = scipy.linalg.eigvalsh(hess, check_finite=False)
-    scale = float(np.max(np.abs(values), initial=0.0))
-    return values[np.abs(values) > NEUTRAL * scale][:count]
+        hessian = tangent_hessian(system)
+        if hessian.shape[0] == 0:
+            return np.zeros(0)
+        tridiagonal = tridiagonal_form(hessian)
+    asked = count + 1  # (a symmetry has one neutral mode, the coaxial mounts' turn)
+    while True:
+        values, scale = spectrum_ends(tridiagonal, asked)
+        stiff = values[np.abs(values) > NEUTRAL * scale]
+        if stiff.size >= count or values.size == hessian.shape[0]:
+            return stiff[:count]
+        asked *= 2
+
+
+def tridiagonal_form(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(diagonal, off-diagonal) of the tridiagonal matrix similar to the symmetric `matrix` (LAPACK dsytrd: the
+    O(n^3) part of its eigenvalues, after which any of them costs O(n) by bisection)."""
+    _, diagonal, off_diagonal, _, info = scipy.linalg.lapack.dsytrd(matrix, lwork=64 * matrix.shape[0])
+    if info != 0:
+        raise ValueError(f"the tridiagonal reduction failed (LAPACK dsytrd info {info})")
+    return diagonal, off_diagonal
+
+
+def spectrum_ends(tridiagonal: tuple[np.ndarray, np.ndarray], lowest: int) -> tuple[np.ndarray, float]:
+    """(the `lowest` lowest eigenvalues, ascending, all if there are fewer; the largest magnitude of all) of the
+    tridiagonal matrix (diagonal, off-diagonal) of tridiagonal_form: half the time of every eigenvalue (1.5 against
+    3 ms for 300 unknowns)."""
+    diagonal, off_diagonal = tridiagonal
+    n = diagonal.shape[0]
+    values = scipy.linalg.eigvalsh_tridiagonal(diagonal, off_diagonal, select="i",
+                                               select_range=(0, min(lowest, n) - 1), check_finite=False)
+    highest = scipy.linalg.eigvalsh_tridiagonal(diagonal, off_diagonal, select="i", select_range=(n - 1, n - 1),
+                                                check_finite=False)[0]
+    return values, max(abs(float(values[0])), abs(float(highest)))
+
+
+def tangent_hessian(system: ContactSystem) -> np.ndarray:
+    """The Hessian of `system` on the tangent space of its constraints (dense, (n - m) square, n unknowns, m
+    constraints), in a basis of that space: the m Householder reflectors of J's QR applied to both sides (O(m n^2);
+    null_space and two products took 40 % of 0.9 ms for 50 segments, 2.5 ms of 5 for 100), unless J is rank
+    deficient.  Call it with one BLAS thread (small matrices: threads only contend)."""
+    hess, jac_t = system.dense(), system.jac_t
+    m = jac_t.shape[1]
+    if not m:
+        return hess
+    reflectors, tau, _, _ = scipy.linalg.lapack.dgeqrf(jac_t)
+    pivots = np.abs(np.diag(reflectors[:m]))
+    if np.min(pivots) > 1e-12 * np.max(pivots):  # Q^T H Q, Q = [range J, null J^T]: its lower right block
+        work = 64 * hess.shape[0]
+        hess = scipy.linalg.lapack.dormqr("L", "T", reflectors, tau, hess, work)[0]
+        return scipy.linalg.lapack.dormqr("R", "N", reflectors, tau, hess, work)[0][m:, m:]
+    basis = scipy.linalg.null_space(jac_t.T)
+    return basis.T @ hess @ basis
 
 
 def _leave_saddle(props, clamps, state, system, model, turns=(0.05, 0.2, 0.8)):

@@ -156,7 +156,7 @@ def entry_travel(alone: ContactModel, obstacle: Obstacle, pieces: Sequence[np.nd
     s = reach_along(obstacle, side) - lowest + radius + 2.0 * clearance  # beyond it: separated by a slab
     for _ in range(TRACE_STEPS):
         s = max(s, 0.0)
-        gap = min(_gap(alone, piece + s * side) for piece in pieces)
+        gap = min(_gap(alone, piece + s * side, beyond=clearance) for piece in pieces)  # (a bound, where far)
         if gap < clearance:  # touched: back off by the shortfall (the gap grows by at most the move) until clear
             for _ in range(TRACE_STEPS):
                 s += clearance - gap
@@ -170,13 +170,16 @@ def entry_travel(alone: ContactModel, obstacle: Obstacle, pieces: Sequence[np.nd
     return math.inf
 
 
-def _gap(alone: ContactModel, nodes: np.ndarray) -> float:
-    """The smallest gap (mm) of the capsules of the hose radius along `nodes` (mm) to the one obstacle of `alone`.
+def _gap(alone: ContactModel, nodes: np.ndarray, within: float = math.inf, beyond: float = math.inf) -> float:
+    """The smallest gap (mm) of the capsules of the hose radius along `nodes` (mm) to the one obstacle of `alone`;
+    for a mesh farther than `within` mm inf (whether the hose is that near, not how far it is), and for one bounded
+    below by at least `beyond` mm that bound (a step of a sphere trace by it is safe; MeshArrays.smallest_gaps).
 
     The first node is counted against planes too (the solver's station-plane pairs leave out station 0, the clamped
     start point)."""
     first = (nodes[0] - alone.planes[:, :3]) @ alone.planes[:, 3:].T if alone.planes.size else np.zeros((0, 0))
-    return float(min([*alone.smallest_gaps(nodes).values(), *(np.diagonal(first) - alone.hose_radius)]))
+    gaps = alone.smallest_gaps(nodes, within, beyond).values()
+    return float(min([*gaps, *(np.diagonal(first) - alone.hose_radius)]))
 
 
 def held_pieces(clamps: Clamps, radius: float) -> list[np.ndarray]:
@@ -204,7 +207,8 @@ def choose_entry(alone: ContactModel, obstacle: Obstacle, nodes: np.ndarray, hel
     for side in ordered:
         if any(side @ other >= HINT_COSINE for other in avoid):
             continue
-        if best is not None and _gap(alone, nodes + best.travel * side) < 0.5 * clearance:
+        near = 0.5 * clearance
+        if best is not None and _gap(alone, nodes + best.travel * side, near) < near:
             continue  # it still touches the hose as far back as the best way starts: this way is no shorter
         travel = entry_travel(alone, obstacle, [nodes], side, clearance)
         if best is not None and travel >= best.travel:

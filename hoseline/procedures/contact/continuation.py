@@ -196,10 +196,13 @@ class FoldWatch:
     extrapolates the square of the product of the FOLD_MODES lowest (smooth through such a crossing, linear near the
     fold while the other stays finite) along the line through the last two equilibria to zero.
     It looks ahead (`ahead`, after each converged step):
-    - the eigenvalues (dense: contact_newton.lowest_stiffnesses, 0.5 ms for 50 segments, 3 ms for 100) are asked only
+    - the eigenvalues (dense: contact_newton.lowest_stiffnesses, 0.5 ms for 50 segments, 2 ms for 100) are asked only
       where the square of the determinant of that Hessian (contact_newton.tangent_log_det, free from the converged
       Newton's factor) extrapolates to zero within DETERMINANT_REACH of the next step, or after the first, short
-      (PROBE) step of a branch that starts at a snap;
+      (PROBE) step of a branch that starts at a snap; and once they saw no fold near, not again on the branch until
+      log |det| falls faster (per unit of the path) than it did there: the determinant also falls where the hose lets
+      go of a contact (the barrier's stiffness leaves it), which is no fold (the strut of bench_contact_placement.py
+      --mesh: 10 eigenvalue solves found none), while towards a fold the fall steepens without end;
     - where they predict a fold in the later half of the next step (or anywhere in it after a probe), the path steps
       APPROACH of the way to it (a fold first predicted nearer, in the first half, is no fold: a genuine one would have
       been seen from the equilibrium before; the strut's lowest eigenvalues fall 17-fold as the hose slides on it and
@@ -224,6 +227,8 @@ class FoldWatch:
         self.failures = 0  # path steps from the last equilibrium that failed
         self.bisecting = False  # the last equilibrium was reached by a step shortened after a failure
         self.trusted = True  # False once a predicted fold proved wrong on this branch (nothing stable past it)
+        self.calm: float | None = None  # the determinant's fall (_determinant_fall) where the eigenvalues last saw no
+        # fold near on this branch: not asked again while it falls no faster (a contact let go, not a fold)
 
     def add(self, t: float, state: RodState, clamps: Clamps, model: ContactModel, log_det: float = math.nan) -> None:
         """An equilibrium of the branch at fraction t, held by `clamps`, against `model`; log_det: log |det| of its
@@ -248,16 +253,28 @@ class FoldWatch:
         probing, self.probing = self.probing, False
         if not self.trusted:
             return dt
+        fall = self._determinant_fall()
         if not probing:
             near = self._determinant_fold()
             if near is None or near > t + DETERMINANT_REACH * dt:
                 return dt
+            if self.calm is not None and fall <= self.calm:  # falling no faster than where no fold was near
+                return dt
         ahead = self.fold()
         nearest = t if probing else t + 0.5 * dt  # a fold first predicted in the first half of a step: see the class doc
         if ahead is None or not nearest < ahead <= min(t + dt, 1.0):  # (a fold past the path's end is not met)
+            self.calm = fall if math.isfinite(fall) else None
             return dt
-        self.aim, self.fallback = ahead - t, dt
+        self.aim, self.fallback, self.calm = ahead - t, dt, None
         return APPROACH * self.aim
+
+    def _determinant_fall(self) -> float:
+        """How fast log |det| of the Hessian on the constraint tangent space falls between the last two equilibria,
+        per unit of the path fraction (negative where it rises; NaN where either is not known)."""
+        if len(self.points) < 2:
+            return math.nan
+        (t0, *_, before), (t1, *_, now) = self.points[-2:]
+        return (before - now) / (t1 - t0)
 
     def _squared(self, point: list) -> float:
         """The product of the FOLD_MODES lowest eigenvalues at an equilibrium, squared (NaN if there are fewer)."""

@@ -16,8 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hoseline.mechanics.contact_motion import only
 from hoseline.mechanics.contact_newton import ContactModel
 from hoseline.model.problem import Problem
+
+SEARCHED_BEYOND = 1e-6  # hose radii past the smallest gap that the halving's mesh searches look (rounding: the halves'
+# gaps are the chain's to the last bits, but need not be found in the same order)
+
 
 @dataclass(frozen=True)
 class NearestGap:
@@ -40,18 +45,17 @@ def nearest_gaps(problem: Problem, model: ContactModel, nodes: np.ndarray) -> di
             line = fitting.centreline(port)  # from the port to the outlet
             pieces.append((f"{which} fitting", line if which == "end" else line[::-1],
                            fitting.radius(problem.hose.outer_diameter)))
+    obstacles = only(model, range(len(model.names)), self_contact=False)  # (not the hose against itself)
+    gaps = [_chain_gaps(obstacles, points) for _, points, _ in pieces]
     nearest = {}
-    for name in model.names:
-        best = None
-        for on, points, radius in pieces:
-            gap = _chain_gaps(model, points)[name] + model.hose_radius - radius
-            if best is None or gap < best[0]:
-                best = (gap, on, points)
-        gap, on, points = best
+    for index, name in enumerate(model.names):
+        chain_gap, gap, on, points = min(((gaps_of[name], gaps_of[name] + model.hose_radius - radius, on, points)
+                                          for gaps_of, (on, points, radius) in zip(gaps, pieces)),
+                                         key=lambda found: found[1])  # (the first of equal gaps)
         if not math.isfinite(gap):
             nearest[name] = NearestGap(gap, on, math.nan)
             continue
-        middle = _along(points, _nearest_segment(model, points, name) + 0.5)
+        middle = _along(points, _nearest_segment(only(model, [index], self_contact=False), points, chain_gap) + 0.5)
         if on == "start fitting":  # its points run from the outlet back to the port
             arc = -middle
         elif on == "end fitting":
@@ -62,22 +66,27 @@ def nearest_gaps(problem: Problem, model: ContactModel, nodes: np.ndarray) -> di
     return nearest
 
 
-def _chain_gaps(model: ContactModel, points: np.ndarray) -> dict[str, float]:
+def _chain_gaps(model: ContactModel, points: np.ndarray, within: float = math.inf) -> dict[str, float]:
     """The smallest gap (mm) of the chain of capsules of the hose radius through `points` (K, 3) to each obstacle,
-    its first point included (the model's plane pairs leave it out)."""
-    gaps = model.smallest_gaps(points)
+    its first point included (the model's plane pairs leave it out); inf for a mesh farther than `within` mm."""
+    gaps = model.smallest_gaps(points, within)
     for row, owner in zip(model.planes, model.owners_planes):
         name = model.names[int(owner)]
         gaps[name] = min(gaps[name], float(np.dot(points[0] - row[:3], row[3:])) - model.hose_radius)
     return gaps
 
 
-def _nearest_segment(model: ContactModel, points: np.ndarray, name: str) -> int:
-    """The index of the segment of the chain through `points` nearest the obstacle `name`, by halving."""
+def _nearest_segment(alone: ContactModel, points: np.ndarray, smallest: float) -> int:
+    """The index of the segment of the chain through `points` nearest the one obstacle of `alone` (no self-contact),
+    whose smallest gap (mm, as _chain_gaps) is `smallest`, by halving: the nearer half (the first of equal ones) is
+    kept.  A mesh is searched only within a hair (SEARCHED_BEYOND hose radii) of that gap: a half farther off gives
+    inf, at a fraction of the cost of its own gap, and the one that holds it its exact gap."""
     first, last = 0, len(points) - 1
+    within = smallest + SEARCHED_BEYOND * alone.hose_radius
     while last - first > 1:
         middle = (first + last) // 2
-        if _chain_gaps(model, points[first:middle + 1])[name] <= _chain_gaps(model, points[middle:last + 1])[name]:
+        if (min(_chain_gaps(alone, points[first:middle + 1], within).values())
+                <= min(_chain_gaps(alone, points[middle:last + 1], within).values())):
             last = middle
         else:
             first = middle

@@ -16,13 +16,19 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
-import scipy.linalg
 
 from hoseline.mechanics.blas_threads import one_blas_thread
 from hoseline.mechanics.banded import NEUTRAL
 from hoseline.mechanics.clipped_newton import clip_forces
 from hoseline.mechanics.contact import SEGMENT_SEGMENT, STATION_KINDS
-from hoseline.mechanics.contact_newton import ContactModel, evaluate_contact, self_exclusion
+from hoseline.mechanics.contact_newton import (
+    ContactModel,
+    evaluate_contact,
+    self_exclusion,
+    spectrum_ends,
+    tangent_hessian,
+    tridiagonal_form,
+)
 from hoseline.mechanics.newton import RodProperties
 from hoseline.mechanics.rod import Clamps, RodState, centerline
 from hoseline.model.problem import Problem
@@ -178,9 +184,8 @@ def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: R
     (rounding: the barrier's curvature makes that largest eigenvalue big)."""
     system = evaluate_contact(props, clamps, state, model)
     with one_blas_thread():  # small dense matrices: threads only contend (4x slower)
-        basis = scipy.linalg.null_space(np.asarray(system.jac_t).T)
-        values = scipy.linalg.eigvalsh(basis.T @ system.dense() @ basis)
-    if abs(values[0]) <= NEUTRAL * float(np.max(np.abs(values))):
+        values, scale = spectrum_ends(tridiagonal_form(tangent_hessian(system)), 1)
+    if abs(values[0]) <= NEUTRAL * scale:
         return 0.0
     return float(values[0]) / props.segment_length
 
