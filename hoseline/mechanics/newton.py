@@ -90,9 +90,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
         clamps.line_weight,
         roll_free,
         clamps.end_clamped,
-        props.springs,
-        props.rest,
-        props.braid,
+        *props.joint_models,
     )
     force = state.end_force if clamps.end_clamped else clamps.end_load
     residual = relative_residual(grad_max, gap, force, clamps.line_weight, props.largest_stiffness, props.length)
@@ -174,9 +172,7 @@ def _solve_equilibrium(props, clamps, state, tolerance, max_iterations, minimise
         props.largest_stiffness,
         tolerance,
         max_iterations,
-        props.springs,
-        props.rest,
-        props.braid,
+        *props.joint_models,
     )
     message = ("", "non-finite residual", "no acceptable step found", "iteration limit reached")[failure]
     new_state = RodState(frames, force if clamps.end_clamped else state.end_force, roll)
