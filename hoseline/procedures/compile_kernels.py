@@ -3,23 +3,26 @@
 compile_kernels() places a small hose the way solve() places any (the straight hose buckled,
 carried to its mount, twisted; stability read at the end), which compiles, or loads from the
 cache of hoseline/compilation.py, every kernel of a placement with the argument types every
-placement uses; with clearance=True it also asks a clearance query (sweeps), with
-stiffeners=True it places the hose with the thesis' stiffener springs (their kernels take other
-argument types), with clips=True a hose held by a fixed and a sliding clip, with contact=True a
-heavy hose that snaps down onto a floor (the contact Newton, its downhill mode and step filter,
-with every kind of obstacle and self-contact), with preset=True the hose with a set (model/preset.py: its
-rest rotations are another argument type), with braid=True the hose with a braid (mechanics/braid.py).
-A hose with two of springs, a set and a braid at once compiles its combination on its first run.  `hoseline compile` compiles every part; the
-Makefile runs it when it installs hoseline, as an ahead-of-time build would, so that the first
-run after `make` compiles nothing.
+placement uses, whatever its joint models (stiffener springs, a set, a braid, or any two of them:
+mechanics/energy.py passes "none" as an empty array, so they share one compiled Newton chain); with
+clearance=True it also asks a clearance query (sweeps), with stiffeners=True it places the hose with
+the thesis' stiffener springs (packing their force table calls a kernel), with clips=True a hose held
+by a fixed and a sliding clip, with contact=True a heavy hose that snaps down onto a floor (the contact
+Newton, its downhill mode and step filter, with every kind of obstacle and self-contact), with
+preset=True the hose with a set (model/preset.py), with braid=True the hose with a braid
+(mechanics/braid.py).  `hoseline compile` compiles every part; the Makefile runs it when it installs
+hoseline, as an ahead-of-time build would, so that the first run after `make` compiles nothing.
 
 On a machine with two cores or more, a first run compiles in two processes: this one compiles
-the Newton iteration (newton_kernels: 15 s of CPU of the 25 s), while a second compiles the
-stability check (stability_kernels: 12 s, with the factorisation it shares) into the same
-cache folder; the small placement then loads the stability check and compiles the little
-left.  The wait drops from the sum to about the longer of the two, for about 4 s more CPU.
-Both work on small made-up arrays of the types a placement passes (tests/test_compiled_cache.py
-checks that a placement then adds no signature to them); a mismatch would cost only time.
+the Newton iteration (newton_kernels), while a second compiles the stability check
+(stability_kernels, with the factorisation it shares) and, when asked, the clearance query into the
+same cache folder; the small placement then loads the stability check and compiles the little
+left.  Both work on small made-up arrays of the types a placement passes (tests/test_compiled_cache.py
+checks that a placement then adds no signature to them); a mismatch would cost only time.  Then, when
+contact is asked, a second process compiles the other parts (clips above all) while this one compiles
+contact, the longest, and loads them after.  The wait drops from the sum to about the longer of the
+two, for some more CPU (each process compiles the NumPy functions its kernels use, and loads the
+other's kernels).  bench/bench_compile_parts.py measures each part and the whole.
 
 A worker of a cluster calls compile_kernels() once when it starts (for Dask: in a
 WorkerPlugin's setup).  Workers on one machine share the cache folder: the first compiles
