@@ -16,12 +16,11 @@ from test_energy_derivatives import dense, finite_differences, random_frames
 from hoseline import Hose, Mount, Problem
 from hoseline.demos.thesis_hose import demo_problem
 from hoseline.io.problem_file import ProblemFileError, problem_from_dict, problem_to_toml
-from hoseline.mechanics.braid import NO_BRAID, braid_coefficients, family_terms
-from hoseline.mechanics.energy import BANDWIDTH, NO_REST, assemble, elastic_energy, joint_energy, joint_moments
+from hoseline.mechanics.braid import braid_coefficients, family_terms
+from hoseline.mechanics.energy import BANDWIDTH, assemble, elastic_energy, joint_energy, joint_moments
 from hoseline.mechanics.rotations import rotation_matrix
 from hoseline.model.braid import Braid
 from hoseline.model.preset import rest_rotations
-from hoseline.mechanics.stiffeners import NO_SPRINGS
 from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.twist_path import follow_twist
 
@@ -46,8 +45,7 @@ def _lagrangian(frames, start, end, stiffness, h, loads, roll_free, rest, braid)
     n = 3 * frames.shape[0] + (1 if roll_free else 0)
     grad = np.empty(n)
     band = np.empty((n, BANDWIDTH + 1))
-    e_el, e_seg = assemble(frames, start, end, stiffness, h, loads, roll_free, grad, band, True, NO_SPRINGS,
-                           NO_REST if rest is None else rest, NO_BRAID if braid is None else braid)
+    e_el, e_seg = assemble(frames, start, end, stiffness, h, loads, roll_free, grad, band, True, None, rest, braid)
     return e_el + e_seg, grad, band
 
 
@@ -117,10 +115,9 @@ def test_gradient_and_hessian_with_braid_match_finite_differences(name, roll_fre
     hess = dense(band)
     assert np.max(np.abs(hess - 0.5 * (fd_hess + fd_hess.T))) < 3e-10 * np.max(np.abs(hess))
     e_seg = -np.sum(loads * frames[:, 2])
-    rest = NO_REST if rest is None else rest
-    elastic = elastic_energy(frames, start, end, stiffness, h, True, NO_SPRINGS, rest, braid)
+    elastic = elastic_energy(frames, start, end, stiffness, h, True, None, rest, braid)
     assert elastic == pytest.approx(energy - e_seg, rel=1e-12)
-    braid_energy = elastic - elastic_energy(frames, start, end, stiffness, h, True, NO_SPRINGS, rest)
+    braid_energy = elastic - elastic_energy(frames, start, end, stiffness, h, True, None, rest, None)
     if expected == {"slack"}:
         assert braid_energy == 0.0
     else:
@@ -168,7 +165,7 @@ def test_straight_twisted_hose_carries_the_hand_torque(twist_deg):
     stiffness = np.array([1.5e5, 1.5e5, torsion])
     braid = braid_coefficients(strands, strand_ea, angle, radius, slack)
     frames = _twisted_frames(twist * (np.arange(segments) + 0.5) / segments)
-    moments, _ = joint_moments(frames, np.eye(3), _twisted_frames([twist])[0], stiffness, h, True, NO_SPRINGS, NO_REST, braid)
+    moments, _ = joint_moments(frames, np.eye(3), _twisted_frames([twist])[0], stiffness, h, True, None, None, braid)
     tau = twist / length
     strain = radius * math.sin(beta) * math.cos(beta) * abs(tau) - slack
     hand = torsion * tau + math.copysign(strands * strand_ea * radius * math.sin(beta) * max(strain, 0.0), tau)

@@ -284,27 +284,3 @@ def test_a_plain_placement_loads_only_the_placements_kernels():
     cache = numba.config.CACHE_DIR or compilation.version_folder().parent
     assert run_python(code, compilation.PACKAGE.parent, cache).splitlines() == [
         "[] []", "['bordered', 'clipped']"]
-
-
-def test_every_joint_model_runs_the_plain_placements_kernels():
-    """After compile_kernels() alone (the plain placement), a twisted hose with a set and a braid at once adds no
-    signature to any kernel: no joint model is an argument type of its own (mechanics/energy.py), so neither a model
-    nor a combination of them compiles the Newton chain again (the springs' part packs its force table through a
-    kernel of its own, hence the stiffeners part of compile_kernels)."""
-    code = SIGNATURES + textwrap.dedent("""
-        from dataclasses import replace
-        from hoseline.procedures.compile_kernels import compile_kernels
-        from hoseline.demos.thesis_hose import demo_problem
-        from hoseline.model.braid import Braid
-        from hoseline.model.preset import Preset
-        from hoseline.procedures.placement.sequence import solve
-
-        compile_kernels()
-        before = signatures()
-        problem = demo_problem(45.0)
-        braid = Braid(30.0, 16, 2500.0, 0.01, 4.0)
-        solve(replace(problem, hose=replace(problem.hose, preset=Preset(1.0 / 300.0, 25.0), braid=braid)))
-        print(sorted(signatures() - before))
-    """)
-    cache = numba.config.CACHE_DIR or compilation.version_folder().parent
-    assert run_python(code, compilation.PACKAGE.parent, cache).splitlines() == ["[]"]

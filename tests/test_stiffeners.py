@@ -11,7 +11,7 @@ from test_energy_derivatives import dense, finite_differences, perturbed, random
 from hoseline import Hose, Mount, Problem, solve
 from hoseline.mechanics.energy import BANDWIDTH, assemble, elastic_energy, joint_moments
 from hoseline.mechanics.rotations import rotation_matrix
-from hoseline.mechanics.stiffeners import FULL, NO_SPRINGS, spring_energy, spring_set, spring_terms_into
+from hoseline.mechanics.stiffeners import FULL, spring_energy, spring_set, spring_terms_into
 from hoseline.model.stiffeners import (
     SpringTable,
     Stiffeners,
@@ -36,8 +36,7 @@ def lagrangian(frames, start, end, stiffness, h, loads, roll_free, springs):
     n = 3 * frames.shape[0] + (1 if roll_free else 0)
     grad = np.empty(n)
     band = np.empty((n, BANDWIDTH + 1))
-    e_el, e_seg = assemble(frames, start, end, stiffness, h, loads, roll_free, grad, band, True,
-                           NO_SPRINGS if springs is None else springs)
+    e_el, e_seg = assemble(frames, start, end, stiffness, h, loads, roll_free, grad, band, True, springs)
     return e_el + e_seg, grad, band
 
 
@@ -125,7 +124,7 @@ def test_energy_and_moments_include_the_springs():
     e_el, _ = assemble(frames, start, end, stiffness, h, np.zeros((4, 3)), False, grad, band, True, springs)
     assert elastic_energy(frames, start, end, stiffness, h, True, springs) == pytest.approx(e_el, rel=1e-13)
     with_springs, _ = joint_moments(frames, start, end, stiffness, h, True, springs)
-    without, _ = joint_moments(frames, start, end, stiffness, h, True, NO_SPRINGS)
+    without, _ = joint_moments(frames, start, end, stiffness, h, True, None)
     # the gradient on each segment is the difference of the moments at its two nodes
     assert np.allclose(grad.reshape(4, 3), with_springs[:-1] - with_springs[1:], atol=1e-12)
     assert not np.allclose(with_springs, without)

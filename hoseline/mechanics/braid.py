@@ -18,7 +18,7 @@ the quadratic C (alpha^2 kappa_b^2 + 2 gamma^2 tau^2) / 2, half of the linear br
 
 The joint kernel (energy.joint_terms_into) adds l W(kappa) with kappa the joint's discrete Darboux
 vector 2 a / (c l); joint_terms gives that energy and its derivatives with respect to u = (a, c).
-Kernel data: braid = array([C N, alpha mm, gamma mm, eps0]) (braid_coefficients), NO_BRAID (empty) for no braid.
+Kernel data: braid = array([C N, alpha mm, gamma mm, eps0]) (braid_coefficients), None for no braid.
 Units: mm, N, radians.
 """
 
@@ -28,8 +28,6 @@ import math
 
 import numpy as np
 from numba import njit
-
-NO_BRAID = np.empty(0)  # no braid: the kernels' data of none (an array, not None: see energy.py)
 
 
 def braid_coefficients(strands: int, strand_axial_stiffness: float, angle_deg: float, radius: float,

@@ -44,7 +44,7 @@ from hoseline.mechanics.energy import (
     _axial_and_c,
     joint_terms_into,
 )
-from hoseline.mechanics.stiffeners import FULL, HALF, has_springs, spring_terms_into
+from hoseline.mechanics.stiffeners import FULL, HALF, spring_terms_into
 
 # unknowns carried by a body of the chain; np.int64 for one compiled _body_basis (see stiffeners.FULL)
 FIXED_BODY, ROLL_BODY, SEGMENT_BODY = np.int64(0), np.int64(1), np.int64(3)
@@ -130,10 +130,9 @@ def _add_joint(grad, band, g, haa, hab, index_a, kind_a, basis_a, index_b, kind_
 @njit(cache=True)
 def joint_into(frame_a, frame_b, stiffness, length, springs, kind, g, haa, hab):
     """Energy (N*mm, returned) of an elastic joint of `length` mm plus its stiffener springs of
-    `kind` (stiffeners.NO_SPRINGS for none), its gradient and Hessian blocks into g, haa, hab (see
-    energy.joint_terms_into)."""
+    `kind` (if any), its gradient and Hessian blocks into g, haa, hab (see energy.joint_terms_into)."""
     energy = joint_terms_into(frame_a, frame_b, stiffness, length, g, haa, hab)
-    if has_springs(springs):  # adds its terms to those of the joint
+    if springs is not None:  # adds its terms to those of the joint
         energy += spring_terms_into(frame_a, frame_b, springs, kind, g, haa, hab)
     return energy
 
@@ -170,7 +169,7 @@ def clipped_system(
     current roll (ignored where clip_framed is False: ball clips).  clip_roll_free: (c,) bool.
     stiffness: (EI1, EI2, GJ) N*mm^2.  lengths: (N,) mm, each segment's length (all L/N unless a
     sliding clip stretches the spans next to it).  forces: (1 + c, 3) N, the end force then the
-    clip forces (the multipliers).  line_weight: (3,) N/mm.  springs: stiffener springs or NO_SPRINGS.
+    clip forces (the multipliers).  line_weight: (3,) N/mm.  springs: stiffener springs or None.
     Returns (energy N*mm: elastic + weight, grad (n,), band (n, BANDWIDTH + 1), jac_t (n, 3 + 3c),
     constraint (3 + 3c,) mm: x_N - end point then x_k - p per clip, largest |grad|, largest |constraint|).
     """

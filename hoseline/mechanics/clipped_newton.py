@@ -162,7 +162,7 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
     energy, grad, band, jac_t, constraint, grad_max, gap = clipped_system(
         state.frames, clamps.start_point, clamps.start_frame, clamps.end_point, end_frame,
         clamps.roll_free, nodes, points, frames, framed, roll_free, props.stiffness, lengths, forces,
-        clamps.line_weight, props.joint_models[0],
+        clamps.line_weight, props.springs,
     )
     force_scale = np.array([float(np.linalg.norm(forces)), 0.0, 0.0])
     if rates.shape[1] == 0:
@@ -342,7 +342,7 @@ def clip_reactions(props: RodProperties, clamps: Clamps, state: RodState) -> tup
     """Force (c, 3) N and moment (c, 3) N*mm (about the clip point, world) of each clip on the hose."""
     nodes, _, frames, framed, _ = clip_arrays(clamps, state)
     lengths, _ = segment_lengths(props, clamps, state)
-    moments = clip_moments(state.frames, nodes, frames, framed, props.stiffness, lengths, props.joint_models[0])
+    moments = clip_moments(state.frames, nodes, frames, framed, props.stiffness, lengths, props.springs)
     return clip_forces(clamps, state).copy(), moments
 
 

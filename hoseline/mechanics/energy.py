@@ -28,8 +28,8 @@ what Newton's method on the rotation group needs.  Derivation in docs/model.md;
 verified against finite differences in tests/test_energy_derivatives.py.
 
 Stiffener springs.  Optionally (`springs`, see mechanics/stiffeners.py) the thesis' off-axis
-springs add their energy, gradient and Hessian blocks to every joint; stiffeners.NO_SPRINGS (the
-default) holds none.
+springs add their energy, gradient and Hessian blocks to every joint; with springs None
+(the default) Numba compiles that branch away, so the plain rod runs as before.
 
 Preset (natural curvature).  Optionally (`rest`, see model/preset.py) every joint j has a
 stress-free relative rotation R0_j (the Q of the joint in the hose's unloaded shape) and its
@@ -40,20 +40,14 @@ other, so the kernel's gradient and Hessian with respect to delta_a and delta_b 
 the preset joint too.  The Darboux vector of Q'' is kappa - kappa0 to second order (the even
 split cancels the commutator term of the Baker-Campbell-Hausdorff series, h/2 kappa0 x kappa,
 that Q' = R0^T Q keeps: with it a set converged at order 1 only, measured; tests/test_preset.py);
-the energy is zero exactly at the stress-free shape.  NO_REST (the default, no rotation) is the straight,
-untwisted hose.
+the energy is zero exactly at the stress-free shape.  With rest None (the default) Numba
+compiles the branch away.
 
 Braid coupling.  Optionally (`braid`, see mechanics/braid.py) every joint adds l W_braid(kappa),
 the energy of tension-only strands at +-beta, a function of the same Darboux vector kappa = 2 a / (c l):
 its derivatives in u = (a, c) come from braid.joint_terms by the chain rule and join E_u and E_uu
-(which then couple the components of a); the mapping to the rotations below is unchanged.  braid.NO_BRAID
-(the default, no data) is no braid.
-
-No model is an empty array, not None: Numba compiles a kernel once for each combination of argument types,
-and None is a type of its own, so springs, a preset and a braid as None-or-array compiled the whole Newton
-chain (assemble and the kernels that call it) once per combination the hoses used: 18 s of the install
-compile's 80 (bench/bench_compile_profile.py).  With empty arrays one compiled signature serves every hose,
-and the kernels branch on the array's length at run time (the same arithmetic as before on either side).
+(which then couple the components of a); the mapping to the rotations below is unchanged.  With
+braid None (the default) Numba compiles that branch away.
 
 Written by hand (Numba) because no library offers this rod; everything is a plain
 loop over joints so the cost is linear in N.
@@ -66,13 +60,11 @@ import math
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.braid import NO_BRAID
 from hoseline.mechanics.braid import joint_energy as braid_joint_energy
 from hoseline.mechanics.braid import joint_terms as braid_joint_terms
-from hoseline.mechanics.stiffeners import FULL, HALF, NO_SPRINGS, has_springs, spring_energy, spring_terms_into
+from hoseline.mechanics.stiffeners import FULL, HALF, spring_energy, spring_terms_into
 
 BANDWIDTH = 5  # half bandwidth of the Hessian: 3x3 blocks, neighbours only
-NO_REST = np.empty((0, 3, 3))  # no preset: the stress-free rotations of no joint (see the module doc)
 
 
 @njit(cache=True)
@@ -102,11 +94,11 @@ def _combine(s0, u0, s1, u1, s2, u2):
 
 
 @njit(cache=True)
-def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid=NO_BRAID):
+def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid=None):
     """Energy (returned), gradient and Hessian blocks of one elastic joint, written into given arrays.
 
     frame_a, frame_b: 3x3 frames (rows = directors).  stiffness: (EI1, EI2, GJ) N*mm^2.
-    joint_length: mm.  braid: the braid coupling's data (mechanics/braid.py), NO_BRAID for none.
+    joint_length: mm.  braid: the braid coupling's data (mechanics/braid.py) or None for none.
     grad_a (3,), hess_aa, hess_ab (3, 3): outputs; the second-order term is
     1/2 da.Haa.da + 1/2 db.Hbb.db + da.Hab.db (hess_ab is not symmetric), and grad_b = -grad_a,
     hess_bb = hess_aa because the energy depends on the relative rotation only.
@@ -138,8 +130,7 @@ def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa,
     e_a0c, e_a1c, e_a2c = -2.0 * e_a0 / c, -2.0 * e_a1 / c, -2.0 * e_a2 / c
     e_cc = 6.0 * energy / c2
     e_a0a1 = e_a0a2 = e_a1a2 = 0.0  # the braid couples the components of kappa
-    braided = braid.shape[0] > 0
-    if braided:
+    if braid is not None:
         (b_e, b_a0, b_a1, b_a2, b_c, b_a0a0, b_a1a1, b_a2a2, e_a0a1, e_a0a2, e_a1a2, b_a0c, b_a1c, b_a2c,
          b_cc) = braid_joint_terms(a0, a1, a2, c, joint_length, braid)
         energy += b_e
@@ -175,7 +166,7 @@ def joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa,
                 e_a0a0 * bu0[x] * bu0[y] + e_a1a1 * bu1[x] * bu1[y] + e_a2a2 * bu2[x] * bu2[y]
                 + e_cc * bu3[x] * bu3[y] + border[x] * bu3[y] + bu3[x] * border[y]
             )
-            if braided:
+            if braid is not None:
                 first += (e_a0a1 * (bu0[x] * bu1[y] + bu1[x] * bu0[y]) + e_a0a2 * (bu0[x] * bu2[y] + bu2[x] * bu0[y])
                           + e_a1a2 * (bu1[x] * bu2[y] + bu2[x] * bu1[y]))
             hess_aa[x, y] = hess_aa[y, x] = first + 0.5 * (t[y][x] + t[x][y])
@@ -218,7 +209,7 @@ def rest_split_into(rest_rotation, frame_a, frame_b, turned_a, turned_b):
 def _preset_joint_terms(frame_a, frame_b, stiffness, joint_length, rest, joint, turned_a, turned_b, grad_a, hess_aa,
                         hess_ab, braid):
     # joint_terms_into of joint `joint`, relative to its stress-free rotation rest[joint] when rest is given
-    if rest.shape[0] == 0:
+    if rest is None:
         return joint_terms_into(frame_a, frame_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid)
     rest_split_into(rest[joint], frame_a, frame_b, turned_a, turned_b)
     return joint_terms_into(turned_a, turned_b, stiffness, joint_length, grad_a, hess_aa, hess_ab, braid)
@@ -237,26 +228,25 @@ def _axial_and_c(frame_a, frame_b):
 
 
 @njit(cache=True)
-def joint_energy(frame_a, frame_b, stiffness, joint_length, braid=NO_BRAID):
+def joint_energy(frame_a, frame_b, stiffness, joint_length, braid=None):
     """Energy of one joint only (N*mm); see joint_terms_into."""
     a0, a1, a2, c = _axial_and_c(frame_a, frame_b)
     energy = 2.0 / joint_length * (stiffness[0] * a0**2 + stiffness[1] * a1**2 + stiffness[2] * a2**2) / c**2
-    if braid.shape[0] > 0:
+    if braid is not None:
         energy += braid_joint_energy(a0, a1, a2, c, joint_length, braid)
     return energy
 
 
 @njit(cache=True)
-def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=NO_SPRINGS, rest=NO_REST,
-                   braid=NO_BRAID):
+def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None, rest=None, braid=None):
     """Total elastic energy (N*mm) of the rod; the last joint only when the end is clamped.
 
-    springs: stiffener springs (mechanics/stiffeners.py) or NO_SPRINGS.  rest: (N+1, 3, 3)
-    stress-free joint rotations (model/preset.py) or NO_REST for a straight, untwisted hose.
-    braid: the braid coupling (mechanics/braid.py) or NO_BRAID.
+    springs: stiffener springs (mechanics/stiffeners.py) or None.  rest: (N+1, 3, 3)
+    stress-free joint rotations (model/preset.py) or None for a straight, untwisted hose.
+    braid: the braid coupling (mechanics/braid.py) or None.
     """
     n = frames.shape[0]
-    if rest.shape[0] > 0:
+    if rest is not None:
         turned_a, turned_b = np.empty((3, 3)), np.empty((3, 3))
         rest_split_into(rest[0], start_frame, frames[0], turned_a, turned_b)
         total = joint_energy(turned_a, turned_b, stiffness, 0.5 * h, braid)
@@ -272,7 +262,7 @@ def elastic_energy(frames, start_frame, end_frame, stiffness, h, end_clamped=Tru
         total += joint_energy(frames[i], frames[i + 1], stiffness, h, braid)
     if end_clamped:
         total += joint_energy(frames[n - 1], end_frame, stiffness, 0.5 * h, braid)
-    if has_springs(springs):
+    if springs is not None:
         total += spring_energy(start_frame, frames[0], springs, HALF)
         for i in range(n - 1):
             total += spring_energy(frames[i], frames[i + 1], springs, FULL)
@@ -299,8 +289,8 @@ def _add_lower_block_transposed(band, row0, col0, block):
 
 @njit(cache=True)
 def assemble(
-    frames, start_frame, end_frame, stiffness, h, segment_loads, roll_free, grad, band, end_clamped=True,
-    springs=NO_SPRINGS, rest=NO_REST, braid=NO_BRAID,
+    frames, start_frame, end_frame, stiffness, h, segment_loads, roll_free, grad, band, end_clamped=True, springs=None,
+    rest=None, braid=None,
 ):
     """Elastic + segment energy of the rod, its gradient and its banded Hessian.
 
@@ -308,9 +298,9 @@ def assemble(
     h: segment length, mm.  segment_loads: (N,3) vectors w_i in N*mm (see module doc).
     roll_free: when True one extra unknown, the roll of the end frame about its tangent, is
     appended after the 3N segment rotations.  end_clamped: False for a free tip (no end joint).
-    springs: stiffener springs between the segments (mechanics/stiffeners.py), NO_SPRINGS for none.
-    rest: (N+1, 3, 3) stress-free rotations of the joints (preset, model/preset.py), NO_REST for none.
-    braid: the braid coupling added to every joint (mechanics/braid.py), NO_BRAID for none.
+    springs: stiffener springs between the segments (mechanics/stiffeners.py), None for none.
+    rest: (N+1, 3, 3) stress-free rotations of the joints (preset, model/preset.py), None for none.
+    braid: the braid coupling added to every joint (mechanics/braid.py), None for none.
     grad: (n,) output, band: (n, BANDWIDTH+1) output (lower band, band[i, k] = H[i, i-k]);
     both are overwritten.  Returns (elastic_energy, segment_energy) in N*mm.
     """
@@ -320,26 +310,24 @@ def assemble(
     g = np.empty(3)
     haa = np.empty((3, 3))
     hab = np.empty((3, 3))
-    preset = rest.shape[0] > 0
-    sprung = has_springs(springs)
-    if not preset:  # the plain rod's calls stay as they are (a shared helper costs a third of this loop)
+    if rest is None:  # the plain rod's calls stay as they are (a shared helper costs a third of this loop)
         energy = joint_terms_into(start_frame, frames[0], stiffness, 0.5 * h, g, haa, hab, braid)
     else:
         turned_a, turned_b = np.empty((3, 3)), np.empty((3, 3))
         rest_split_into(rest[0], start_frame, frames[0], turned_a, turned_b)
         energy = joint_terms_into(turned_a, turned_b, stiffness, 0.5 * h, g, haa, hab, braid)
-    if sprung:
+    if springs is not None:
         energy += spring_terms_into(start_frame, frames[0], springs, HALF, g, haa, hab)
     for x in range(3):  # element by element: a slice assignment compiles Numba's shape-error messages (0.5 s)
         grad[x] -= g[x]
     _add_diag_block(band, 0, haa)
     for i in range(n_seg - 1):
-        if not preset:
+        if rest is None:
             energy += joint_terms_into(frames[i], frames[i + 1], stiffness, h, g, haa, hab, braid)
         else:
             rest_split_into(rest[i + 1], frames[i], frames[i + 1], turned_a, turned_b)
             energy += joint_terms_into(turned_a, turned_b, stiffness, h, g, haa, hab, braid)
-        if sprung:
+        if springs is not None:
             energy += spring_terms_into(frames[i], frames[i + 1], springs, FULL, g, haa, hab)
         for x in range(3):
             grad[3 * i + x] += g[x]
@@ -349,12 +337,12 @@ def assemble(
         _add_lower_block_transposed(band, 3 * i + 3, 3 * i, hab)
     last = 3 * (n_seg - 1)
     if end_clamped:
-        if not preset:
+        if rest is None:
             energy += joint_terms_into(frames[n_seg - 1], end_frame, stiffness, 0.5 * h, g, haa, hab, braid)
         else:
             rest_split_into(rest[n_seg], frames[n_seg - 1], end_frame, turned_a, turned_b)
             energy += joint_terms_into(turned_a, turned_b, stiffness, 0.5 * h, g, haa, hab, braid)
-        if sprung:
+        if springs is not None:
             energy += spring_terms_into(frames[n_seg - 1], end_frame, springs, HALF, g, haa, hab)
         for x in range(3):
             grad[last + x] += g[x]
@@ -385,16 +373,15 @@ def assemble(
 
 
 @njit(cache=True)
-def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=NO_SPRINGS, rest=NO_REST,
-                  braid=NO_BRAID):
+def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True, springs=None, rest=None, braid=None):
     """Internal moment (world, N*mm) and discrete Darboux vector (material, 1/mm) at the N+1 nodes.
 
     The moment at node j is dE_joint/d(delta_B): the moment exerted by the part of the
     hose beyond the node on the part before it (springs included when given).  The Darboux
     vector components are (bending about d1, bending about d2, twist rate).  A free tip
-    carries no moment.  rest: stress-free joint rotations (preset) or NO_REST; the moment is
+    carries no moment.  rest: stress-free joint rotations (preset) or None; the moment is
     then that of the joint's deviation from them, the Darboux vector stays the geometric one.
-    braid: the braid coupling (mechanics/braid.py) or NO_BRAID.
+    braid: the braid coupling (mechanics/braid.py) or None.
     """
     n_seg = frames.shape[0]
     g = np.empty(3)
@@ -411,7 +398,7 @@ def joint_moments(frames, start_frame, end_frame, stiffness, h, end_clamped=True
         else:
             fa, fb, length, kind = frames[j - 1], frames[j], h, FULL
         _preset_joint_terms(fa, fb, stiffness, length, rest, j, turned_a, turned_b, g, haa, hab, braid)
-        if has_springs(springs):
+        if springs is not None:
             spring_terms_into(fa, fb, springs, kind, g, haa, hab)
         for x in range(3):
             moments[j, x] = -g[x]

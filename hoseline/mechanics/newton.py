@@ -90,7 +90,9 @@ def evaluate(props: RodProperties, clamps: Clamps, state: RodState) -> System:
         clamps.line_weight,
         roll_free,
         clamps.end_clamped,
-        *props.joint_models,
+        props.springs,
+        props.rest,
+        props.braid,
     )
     force = state.end_force if clamps.end_clamped else clamps.end_load
     residual = relative_residual(grad_max, gap, force, clamps.line_weight, props.largest_stiffness, props.length)
@@ -172,7 +174,9 @@ def _solve_equilibrium(props, clamps, state, tolerance, max_iterations, minimise
         props.largest_stiffness,
         tolerance,
         max_iterations,
-        *props.joint_models,
+        props.springs,
+        props.rest,
+        props.braid,
     )
     message = ("", "non-finite residual", "no acceptable step found", "iteration limit reached")[failure]
     new_state = RodState(frames, force if clamps.end_clamped else state.end_force, roll)

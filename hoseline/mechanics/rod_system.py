@@ -10,11 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from hoseline.mechanics.braid import NO_BRAID
-from hoseline.mechanics.energy import NO_REST
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.mechanics.rotations import rotation_matrix
-from hoseline.mechanics.stiffeners import NO_SPRINGS
 
 
 @dataclass(frozen=True)
@@ -43,13 +40,6 @@ class RodProperties:
     @property
     def largest_stiffness(self) -> float:
         return float(max(self.stiffness))
-
-    @property
-    def joint_models(self) -> tuple:
-        """(springs, rest, braid) as the kernels take them: NO_SPRINGS, NO_REST, NO_BRAID for those the hose lacks
-        (empty arrays rather than None, so that every hose runs the same compiled kernels: see energy.py)."""
-        return (NO_SPRINGS if self.springs is None else self.springs, NO_REST if self.rest is None else self.rest,
-                NO_BRAID if self.braid is None else self.braid)
 
 
 @dataclass

@@ -26,8 +26,7 @@ K = (F / L) (I - n n^T) + F' (h / l) n n^T:
 Verified against finite differences in tests/test_stiffeners.py.
 
 Kernel data (see spring_set): a tuple (anchors, rest, table_x, table_f, table_w, span_ratio)
-with anchors (2, m, 2, 3) for the two joint kinds FULL (l = h) and HALF (l = h/2); NO_SPRINGS has m = 0 and an
-empty table (no springs as a tuple of the same types, not None: see energy.py).
+with anchors (2, m, 2, 3) for the two joint kinds FULL (l = h) and HALF (l = h/2).
 """
 
 from __future__ import annotations
@@ -40,7 +39,6 @@ from numba import njit
 # np.int64, not int: Numba compiles a kernel again for every int constant passed to it (a Literal[int] type each);
 # an np.int64 is a plain int64, so every call site shares one compiled version
 FULL, HALF = np.int64(0), np.int64(1)  # joint kinds: between two segments, between a segment and a fitting
-NO_SPRINGS = (np.empty((2, 0, 2, 3)), np.empty((2, 0)), np.empty(0), np.empty(0), np.empty(0), np.array([1.0, 2.0]))
 
 
 def spring_set(anchors_full: np.ndarray, anchors_half: np.ndarray, deformation, force) -> tuple:
@@ -106,12 +104,6 @@ def _skew_sandwich(u, k, w, out, sign, m):
         out[0, c] += sign * (u[1] * m[2, c] - u[2] * m[1, c])
         out[1, c] += sign * (u[2] * m[0, c] - u[0] * m[2, c])
         out[2, c] += sign * (u[0] * m[1, c] - u[1] * m[0, c])
-
-
-@njit(cache=True)
-def has_springs(springs):
-    """Whether a spring set (spring_set, or NO_SPRINGS) holds any spring."""
-    return springs[0].shape[1] > 0
 
 
 @njit(cache=True)

@@ -3,15 +3,15 @@
 compile_kernels() places a small hose the way solve() places any (the straight hose buckled,
 carried to its mount, twisted; stability read at the end), which compiles, or loads from the
 cache of hoseline/compilation.py, every kernel of a placement with the argument types every
-placement uses, whatever its joint models (stiffener springs, a set, a braid, or any two of them:
-mechanics/energy.py passes "none" as an empty array, so they share one compiled Newton chain); with
-clearance=True it also asks a clearance query (sweeps), with stiffeners=True it places the hose with
-the thesis' stiffener springs (packing their force table calls a kernel), with clips=True a hose held
-by a fixed and a sliding clip, with contact=True a heavy hose that snaps down onto a floor (the contact
-Newton, its downhill mode and step filter, with every kind of obstacle and self-contact), with
-preset=True the hose with a set (model/preset.py), with braid=True the hose with a braid
-(mechanics/braid.py).  `hoseline compile` compiles every part; the Makefile runs it when it installs
-hoseline, as an ahead-of-time build would, so that the first run after `make` compiles nothing.
+placement uses; with clearance=True it also asks a clearance query (sweeps), with
+stiffeners=True it places the hose with the thesis' stiffener springs (their kernels take other
+argument types), with clips=True a hose held by a fixed and a sliding clip, with contact=True a
+heavy hose that snaps down onto a floor (the contact Newton, its downhill mode and step filter,
+with every kind of obstacle and self-contact), with preset=True the hose with a set (model/preset.py: its
+rest rotations are another argument type), with braid=True the hose with a braid (mechanics/braid.py).
+A hose with two of springs, a set and a braid at once compiles its combination on its first run.  `hoseline compile`
+compiles every part; the Makefile runs it when it installs hoseline, as an ahead-of-time build would, so that the
+first run after `make` compiles nothing.
 
 On a machine with two cores or more, a first run compiles in two processes: this one compiles
 the Newton iteration (newton_kernels), while a second compiles the stability check

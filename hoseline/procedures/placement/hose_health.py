@@ -41,7 +41,8 @@ def station_moments(props: RodProperties, clamps: Clamps, state: RodState):
     tangents at the N+1 stations of an equilibrium `state` under `clamps`."""
     end_frame = end_frame_of(clamps, state)
     moments, darboux = joint_moments(
-        state.frames, clamps.start_frame, end_frame, props.stiffness, props.segment_length, True, *props.joint_models,
+        state.frames, clamps.start_frame, end_frame, props.stiffness, props.segment_length, True, props.springs,
+        props.rest, props.braid,
     )
     tangents = np.vstack([clamps.start_frame[2][None], state.frames[:, 2], end_frame[2][None]])
     node_tangent = tangents[:-1] + tangents[1:]
@@ -69,7 +70,7 @@ def _clip_station_moments(props: RodProperties, clamps: Clamps, state: RodState,
     for node, frame, has_frame in zip(nodes, frames, framed):
         if has_frame:
             half = 0.5 * lengths[node]
-            joint_into(frame, state.frames[node], props.stiffness, half, props.joint_models[0], HALF, g, haa, hab)
+            joint_into(frame, state.frames[node], props.stiffness, half, props.springs, HALF, g, haa, hab)
             moments[node] = -g
             darboux[node] = joint_darboux(frame, state.frames[node], half)
             tangent = frame[2] + state.frames[node, 2]

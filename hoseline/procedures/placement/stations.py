@@ -96,8 +96,8 @@ def build_result(
         end_moment=moments[-1].copy(),
         elastic_energy=float(
             system.energy - weight_energy if clips
-            else elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True,
-                                *props.joint_models)
+            else elastic_energy(state.frames, clamps.start_frame, clamps.end_frame, props.stiffness, h, True, props.springs,
+                                props.rest, props.braid)
         ),
         gravity_energy=weight_energy,
         stability_margin=margin,
