@@ -170,12 +170,13 @@ def is_compiled(part: str) -> bool:
 
 @contextmanager
 def compiling(part: str) -> Iterator[None]:
-    """Hold the compile lock of the version folder while the body compiles `part`, then mark it compiled.
+    """Hold the compile lock of `part` in the version folder while the body compiles it, then mark it compiled.
 
-    Processes that start together (the workers of a cluster) compile once: the others wait
-    for the lock and then find the kernels in the cache.
+    Processes that start together (the workers of a cluster) compile a part once: the others wait
+    for its lock and then find the kernels in the cache.  Each part has its own lock, so two processes
+    can compile two parts side by side (`hoseline compile` does, procedures/compile_kernels.py).
     """
-    with open(version_folder() / "compile.lock", "a") as lock:
+    with open(version_folder() / f"compile-{part}.lock", "a") as lock:
         _lock(lock)
         yield
         _marker(part).touch()

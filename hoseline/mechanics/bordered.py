@@ -52,7 +52,10 @@ def tangent_space_inertia(schur, jac_t):
     while dependent < m and gram_values[dependent] <= NEUTRAL * gram_values[m - 1]:
         dependent += 1
     basis = np.zeros((total, total - dependent))
-    basis[:m, : m - dependent] = gram_vectors[:, dependent:] / np.sqrt(gram_values[dependent:])
+    for column in range(m - dependent):  # a loop: Numba's broadcasting slice assignment compiles for 1.2 s
+        length = np.sqrt(gram_values[dependent + column])
+        for row in range(m):
+            basis[row, column] = gram_vectors[row, dependent + column] / length
     for extra in range(total - m):
         basis[m + extra, m - dependent + extra] = 1.0
     return positive_count(basis.T @ schur @ basis), m - dependent

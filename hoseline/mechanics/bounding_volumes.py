@@ -43,7 +43,9 @@ def build_tree(item_lower, item_upper, centroids, leaf_size):
     """
     count = item_lower.shape[0]
     capacity = 2 * count  # a binary tree with at least one triangle per leaf has fewer nodes
-    order = np.arange(count)
+    order = np.empty(count, np.int64)
+    for item in range(count):  # np.arange(count), which compiles for 0.6 s
+        order[item] = item
     lower = np.empty((capacity, 3))
     upper = np.empty((capacity, 3))
     children = -np.ones((capacity, 2), dtype=np.int64)

@@ -46,7 +46,8 @@ from hoseline.mechanics.energy import (
 )
 from hoseline.mechanics.stiffeners import FULL, HALF, spring_terms_into
 
-FIXED_BODY, ROLL_BODY, SEGMENT_BODY = 0, 1, 3  # unknowns carried by a body of the chain
+# unknowns carried by a body of the chain; np.int64 for one compiled _body_basis (see stiffeners.FULL)
+FIXED_BODY, ROLL_BODY, SEGMENT_BODY = np.int64(0), np.int64(1), np.int64(3)
 
 
 @njit(cache=True)

@@ -47,7 +47,9 @@ from numba import njit
 from hoseline.mechanics.proximity import corner_of, point_of
 from hoseline.mechanics.self_pairs import near_segment_pairs
 
-STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT, STATION_TRIANGLE, SEGMENT_EDGE = 0, 1, 2, 3, 4, 5
+# np.int64, not int: Numba compiles a kernel again for every int constant passed to it (a Literal[int] type each);
+# an np.int64 is a plain int64, so every call site shares one compiled version
+STATION_PLANE, SEGMENT_BALL, SEGMENT_CAPSULE, SEGMENT_SEGMENT, STATION_TRIANGLE, SEGMENT_EDGE = np.arange(6)
 PAIR_KINDS = ("station-plane", "segment-ball", "segment-capsule", "segment-segment", "station-triangle", "segment-edge")
 STATION_KINDS = (STATION_PLANE, STATION_TRIANGLE)  # pairs whose hose primitive is a station, not a segment
 MESH_KINDS = (STATION_TRIANGLE, SEGMENT_EDGE)  # pairs with a triangle mesh

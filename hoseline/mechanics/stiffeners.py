@@ -36,7 +36,9 @@ import math
 import numpy as np
 from numba import njit
 
-FULL, HALF = 0, 1  # joint kinds: between two segments, between a segment and a fitting
+# np.int64, not int: Numba compiles a kernel again for every int constant passed to it (a Literal[int] type each);
+# an np.int64 is a plain int64, so every call site shares one compiled version
+FULL, HALF = np.int64(0), np.int64(1)  # joint kinds: between two segments, between a segment and a fitting
 
 
 def spring_set(anchors_full: np.ndarray, anchors_half: np.ndarray, deformation, force) -> tuple:

@@ -9,17 +9,20 @@ argument types), with clips=True a hose held by a fixed and a sliding clip, with
 heavy hose that snaps down onto a floor (the contact Newton, its downhill mode and step filter,
 with every kind of obstacle and self-contact), with preset=True the hose with a set (model/preset.py: its
 rest rotations are another argument type), with braid=True the hose with a braid (mechanics/braid.py).
-A hose with two of springs, a set and a braid at once compiles its combination on its first run.  `hoseline compile` compiles every part; the
-Makefile runs it when it installs hoseline, as an ahead-of-time build would, so that the first
-run after `make` compiles nothing.
+A hose with two of springs, a set and a braid at once compiles its combination on its first run.  `hoseline compile`
+compiles every part; the Makefile runs it when it installs hoseline, as an ahead-of-time build would, so that the
+first run after `make` compiles nothing.
 
 On a machine with two cores or more, a first run compiles in two processes: this one compiles
-the Newton iteration (newton_kernels: 15 s of CPU of the 25 s), while a second compiles the
-stability check (stability_kernels: 12 s, with the factorisation it shares) into the same
-cache folder; the small placement then loads the stability check and compiles the little
-left.  The wait drops from the sum to about the longer of the two, for about 4 s more CPU.
-Both work on small made-up arrays of the types a placement passes (tests/test_compiled_cache.py
-checks that a placement then adds no signature to them); a mismatch would cost only time.
+the Newton iteration (newton_kernels), while a second compiles the stability check
+(stability_kernels, with the factorisation it shares) and, when asked, the clearance query into the
+same cache folder; the small placement then loads the stability check and compiles the little
+left.  Both work on small made-up arrays of the types a placement passes (tests/test_compiled_cache.py
+checks that a placement then adds no signature to them); a mismatch would cost only time.  Then, when
+contact is asked, a second process compiles the other parts (clips above all) while this one compiles
+contact, the longest, and loads them after.  The wait drops from the sum to about the longer of the
+two, for some more CPU (each process compiles the NumPy functions its kernels use, and loads the
+other's kernels).  bench/bench_compile_parts.py measures each part and the whole.
 
 A worker of a cluster calls compile_kernels() once when it starts (for Dask: in a
 WorkerPlugin's setup).  Workers on one machine share the cache folder: the first compiles
@@ -98,6 +101,29 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
     clearance query, with `stiffeners` those of a placement with stiffener springs, with `clips`
     those of a placement with clips, with `contact` those of a placement with contact, with `preset`
     those of a hose with a set, with `braid` those of a braided hose."""
+    from hoseline.procedures.placement.sequence import solve
+
+    asked = {"clearance": clearance, "stiffeners": stiffeners, "clips": clips, "contact": contact, "preset": preset,
+             "braid": braid}
+    with compiling("placement"):
+        if not is_compiled("placement"):
+            # the clearance query shares no kernel with a placement: the second process compiles it too
+            with _second_process(["stability_kernels()"] + (["_compile_part('clearance')"] if clearance else [])):
+                newton_kernels()
+        solve(SMALL_PLACEMENT)
+    # contact takes about as long as the other parts together: while this process compiles it, a second one
+    # compiles those; this one then loads them from the cache (so that it holds every kernel, as without the second)
+    rest = [part for part, wanted in asked.items() if wanted and part != "contact"]
+    beside = [part for part in rest if not is_compiled(part)]
+    if contact:
+        with _second_process([f"_compile_part({part!r})" for part in beside] if not is_compiled("contact") else []):
+            _compile_part("contact")
+    for part in rest:
+        _compile_part(part)
+
+
+def _compile_part(part: str) -> None:
+    # compile_kernels' `part` (beyond the placement), under its lock; from the cache when already compiled
     from hoseline.mechanics.contact_motion import moved_model
     from hoseline.model.motion import Pose
     from hoseline.model.stiffeners import thesis_preset
@@ -105,37 +131,29 @@ def compile_kernels(clearance: bool = False, stiffeners: bool = False, clips: bo
     from hoseline.procedures.geometry.clearance import TriangleIndex
     from hoseline.procedures.placement.sequence import solve
 
-    with compiling("placement"):
-        if not is_compiled("placement"):
-            with _second_process("stability_kernels"):
-                newton_kernels()
-        solve(SMALL_PLACEMENT)
-    if clearance:
-        with compiling("clearance"):
+    with compiling(part):
+        if part == "clearance":
             triangle = np.array([[0.0, 0.0, 10.0], [1.0, 0.0, 10.0], [0.0, 1.0, 10.0]])
             TriangleIndex(triangle, np.array([[0, 1, 2]])).nearest(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]), 0.5)
-    if stiffeners:
-        with compiling("stiffeners"):  # untwisted: the twist path takes seconds with springs, and no other kernel
-            preset = thesis_preset(SMALL_PLACEMENT.hose.length)
-            hose = replace(SMALL_PLACEMENT.hose, segments=preset.segments, stiffeners=preset.stiffeners)
+        elif part == "stiffeners":  # untwisted: the twist path takes seconds with springs, and no other kernel
+            springs = thesis_preset(SMALL_PLACEMENT.hose.length)
+            hose = replace(SMALL_PLACEMENT.hose, segments=springs.segments, stiffeners=springs.stiffeners)
             solve(replace(SMALL_PLACEMENT, hose=hose, end_twist_deg=0.0))
-    if clips:
-        with compiling("clips"):
+        elif part == "clips":
             solve(replace(SMALL_PLACEMENT, clips=small_clips()), estimate_error=False)
-    if contact:
-        with compiling("contact"):
+        elif part == "contact":
             solve(CONTACT_PLACEMENT, estimate_error=False)
             # without the sheet, its meshes are small: their searches walk the trees in one call (walked_mesh_pairs)
             small = problem_contact_model(replace(CONTACT_PLACEMENT, contact=CONTACT_PLACEMENT.contact[:-1]))
             small.pairs(np.linspace([0.0, 0.0, 100.0], [150.0, 0.0, 100.0], 17), small.activation)
             model = problem_contact_model(CONTACT_PLACEMENT)  # a sweep's obstacles moved with their bodies
             moved_model(model, [Pose(position=np.array([1.0, 0.0, 0.0]))] * len(model.names))
-    if preset:
-        with compiling("preset"):
+        elif part == "preset":
             solve(replace(SMALL_PLACEMENT, hose=replace(SMALL_PLACEMENT.hose, preset=SMALL_PRESET)))
-    if braid:
-        with compiling("braid"):
+        elif part == "braid":
             solve(replace(SMALL_PLACEMENT, hose=replace(SMALL_PLACEMENT.hose, braid=SMALL_BRAID)))
+        else:
+            raise ValueError(f"no part {part!r} to compile")
 
 
 def small_clips() -> tuple[Clip, Clip]:
@@ -191,19 +209,20 @@ def stability_kernels() -> None:
 
 
 @contextmanager
-def _second_process(name: str):
-    # run `name`() of this module in another process during the body, into the same cache
-    # folder, when there is a second core and a cache that outlives the process; wait for it after
+def _second_process(calls: list[str]):
+    # run `calls` (calls of this module's functions, in turn) in another process during the body, into the same
+    # cache folder, when there is a second core and a cache that outlives the process; wait for it after
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    if cores < 2 or not persistent():
+    if not calls or cores < 2 or not persistent():
         yield
         return
     search_path = os.pathsep.join(filter(None, [str(PACKAGE.parent), os.environ.get("PYTHONPATH")]))  # this hoseline
     environment = {**os.environ, "NUMBA_CACHE_DIR": str(version_folder().parent), "PYTHONPATH": search_path}
-    code = f"from {__name__} import {name}; {name}()"
+    names = sorted({call.split("(")[0] for call in calls})
+    code = f"from {__name__} import {', '.join(names)}; " + "; ".join(calls)
     helper = subprocess.Popen([sys.executable, "-c", code], env=environment,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         yield
     finally:
-        helper.wait()  # a failed helper only costs time: the placement compiles what it lacks
+        helper.wait()  # a failed helper only costs time: this process compiles what it lacks
