@@ -280,8 +280,10 @@ def test_a_drag_along_the_floor_then_a_turn_saves_as_shown_or_says_how_far_off(b
     with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
         snapped_drag(page, "end", "Z", "moved 30 mm [-30, 0, 0]")  # towards the start: more of it on the floor
         page.keyboard.press("s")  # snapping off
-        state = drag_handle(page, "end", "Z", "rotate", -60)  # rolled on the floor
-        assert min(c["min_gap"] for c in state["readouts"]["contacts"]) < 0.05  # lying on the floor
+        drag_handle(page, "end", "Z", "rotate", -60)  # rolled on the floor
+        page.wait_for_function("() => window.studio.state.readouts.pending.length === 0")  # the gaps, once it pauses
+        contacts = page.evaluate("() => window.studio.state.readouts.contacts")
+        assert min(c["min_gap"] for c in contacts) < 0.05  # lying on the floor
         page.wait_for_function("() => window.studio.state.comparison && window.studio.state.comparison.saved",
                                timeout=120000)
         saved = page.evaluate("() => window.studio.state.comparison.saved")
