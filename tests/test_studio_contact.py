@@ -152,3 +152,39 @@ def test_a_drag_keeps_the_contact_models_search_trees_and_a_slider_its_stiffness
     assert session.tracker.contact.mesh is built.mesh and session.tracker.contact.stiffness == built.stiffness
     session.apply(Target(type="set", seq=9, hose={"mass_per_length": 2.0 * MASS}))
     assert session.tracker.contact.mesh is built.mesh and session.tracker.contact.stiffness > built.stiffness
+
+
+def test_a_drag_sends_the_costly_readouts_pending_and_completes_them_when_it_pauses(tmp_path):
+    """During a drag the states leave the stability margin and the contacts' smallest gaps pending (null, named in
+    "pending"); once the drag pauses a "readouts" message brings them, equal to a complete evaluation of the shape
+    shown; the readouts the drag's states did send were current."""
+    from starlette.testclient import TestClient
+
+    from hoseline.studio.server import create_app
+
+    app = create_app(Session(resting_hose()), tmp_path, allowed_hosts=("testserver",))
+    session = app.state.studio.session
+    with TestClient(app) as client, client.websocket_connect("/ws") as ws:
+        ws.receive_json()
+        state = ws.receive_json()
+        assert state["readouts"]["pending"] == [] and state["readouts"]["stability_margin"] is not None
+        end = state["fittings"]["end"]
+        for k in range(1, 4):
+            point = (np.array(end["point"]) + [0.0, 0.0, -2.0 * k]).tolist()
+            ws.send_json({"type": "set", "seq": k, "end": {"point": point, "quaternion": end["quaternion"]}})
+            moved = ws.receive_json()
+            assert (moved["type"], moved["seq"]) == ("state", k)
+            readouts = moved["readouts"]
+            assert readouts["pending"] == ["stability_margin", "min_gap"]
+            assert readouts["stability_margin"] is None and readouts["contacts"][0]["min_gap"] is None
+        completed = ws.receive_json()  # the drag pauses: the readouts come before the idle comparison
+        assert completed["type"] == "readouts"
+        fresh = state_message(session)["readouts"]
+        assert completed["readouts"] == fresh and fresh["pending"] == []
+        result = session.result()
+        assert completed["readouts"]["stability_margin"] == result.stability_margin > 0.0
+        assert completed["readouts"]["contacts"][0]["min_gap"] == result.contacts[0].min_gap
+        for key in ("start_force", "end_force", "end_moment", "min_bend_radius", "min_clearance"):  # the drag's: current
+            assert readouts[key] == fresh[key]
+        assert readouts["contacts"][0]["total_force"] == fresh["contacts"][0]["total_force"]
+        assert ws.receive_json()["type"] == "comparison"

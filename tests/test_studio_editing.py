@@ -272,6 +272,40 @@ def snapped_drag(page, name: str, axis: str, readout: str) -> dict:
     return drawn_after(page, drag)
 
 
+# every time the readouts table is shown: the stability margin's row (its text and colour class) and whether the
+# state shown had that readout pending
+MARGIN_ROWS = """() => {
+    window.marginRows = [];
+    new MutationObserver(() => {
+        const cell = document.querySelector('#readouts tr[data-readout="stability_margin"] td:nth-child(2)');
+        window.marginRows.push({ text: cell.textContent, cls: cell.className,
+                                 pending: window.studio.state.readouts.pending.includes('stability_margin') });
+    }).observe(document.getElementById('readouts'), { childList: true });
+}"""
+
+
+def test_a_drag_shows_the_stability_margin_pending_until_it_pauses_never_a_stale_value(browser, tmp_path):
+    """During a drag on the floor the states leave the stability margin and the floor's smallest gap pending: the page
+    shows them greyed as pending, never the last value; once the drag pauses the server's readouts come and the page
+    shows the margin of the shape shown."""
+    with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
+        page.evaluate(MARGIN_ROWS)
+        drag_handle(page, "end", "Z", "translate", 25)
+        page.wait_for_function("() => window.studio.state.readouts.pending.length === 0", timeout=20000)
+        page.wait_for_function("() => window.marginRows.length && !window.marginRows.at(-1).pending")
+        rows = page.evaluate("() => window.marginRows")
+        readouts = page.evaluate("() => window.studio.state.readouts")
+        assert any(row["pending"] for row in rows)  # the drag's states were shown
+        assert all(row["text"].startswith("…") and row["cls"] == "pending" for row in rows if row["pending"])
+        assert all(not row["text"].startswith("…") for row in rows if not row["pending"])
+        value, unit = rows[-1]["text"].split(" ")
+        assert unit == "N/rad²" and float(value) == pytest.approx(readouts["stability_margin"], rel=1e-3)
+        assert rows[-1]["cls"] == "good" and readouts["stability_margin"] > 0.0
+        [floor] = readouts["contacts"]
+        assert floor["min_gap"] is not None and "…" not in page.locator("#readouts").text_content()
+        assert not errors
+
+
 def test_a_drag_along_the_floor_then_a_turn_saves_as_shown_or_says_how_far_off(browser, tmp_path):
     """On the frictionless floor the hose dragged along and rolled may lie on a branch that a fresh placement reaches
     at some twist, or on one none reaches (which one depends on the states the drag passed through: moves made while
@@ -280,8 +314,10 @@ def test_a_drag_along_the_floor_then_a_turn_saves_as_shown_or_says_how_far_off(b
     with opened_page(browser, Session(resting_hose()), tmp_path) as (page, errors, _):
         snapped_drag(page, "end", "Z", "moved 30 mm [-30, 0, 0]")  # towards the start: more of it on the floor
         page.keyboard.press("s")  # snapping off
-        state = drag_handle(page, "end", "Z", "rotate", -60)  # rolled on the floor
-        assert min(c["min_gap"] for c in state["readouts"]["contacts"]) < 0.05  # lying on the floor
+        drag_handle(page, "end", "Z", "rotate", -60)  # rolled on the floor
+        page.wait_for_function("() => window.studio.state.readouts.pending.length === 0")  # the gaps, once it pauses
+        contacts = page.evaluate("() => window.studio.state.readouts.contacts")
+        assert min(c["min_gap"] for c in contacts) < 0.05  # lying on the floor
         page.wait_for_function("() => window.studio.state.comparison && window.studio.state.comparison.saved",
                                timeout=120000)
         saved = page.evaluate("() => window.studio.state.comparison.saved")

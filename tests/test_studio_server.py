@@ -151,8 +151,10 @@ def test_a_drag_during_the_idle_comparison_abandons_it_and_gets_its_state_first(
         assert next_state(ws)[0]["seq"] == 1
         assert started.wait(until_abandoned_s)  # the idle comparison has begun
         ws.send_json({**moved_end(state, [0.0, 0.0, 2.0]), "seq": 2})
+        assert ws.receive_json()["type"] == "readouts"  # the first drag's readouts, before the comparison began
         assert ws.receive_json()["seq"] == 2  # the drag's state, before any comparison
         assert client.app.state.studio.abandoned == 1
+        assert ws.receive_json()["type"] == "readouts"  # its readouts, then the comparison
         comparison = ws.receive_json()  # made again once idle, of the shape dragged to
         assert comparison["type"] == "comparison" and not comparison["comparison"]["same"]
         assert len(calls) >= 2 and np.allclose(calls[-1].end.point, np.array(state["fittings"]["end"]["point"]) + [0, 0, 2])

@@ -14,7 +14,9 @@
 
 The solver runs in one worker thread, off the event loop, and every use of the session goes
 through it, one at a time.  While it works on a step, targets arriving over the WebSocket
-coalesce (inbox.py).  When nothing arrives for IDLE_SECONDS after a change, the problem is
+coalesce (inbox.py).  A drag's step (a target) is answered with the shape and the readouts that cost
+little; the others (view.PENDING_READOUTS: the stability margin, each obstacle's smallest gap) are
+sent pending and follow in a "readouts" message when nothing arrives for IDLE_SECONDS.  Then the problem is
 placed afresh and the page told whether that shape is the one shown; a message arriving meanwhile
 abandons that placement after its current continuation step (and it is made again at the next idle
 moment), so a drag never waits for it.  Requests must come
@@ -52,10 +54,10 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.studio.history import History
 from hoseline.studio.inbox import Inbox
-from hoseline.studio.messages import Command, MessageError, parse_message
+from hoseline.studio.messages import Command, MessageError, Target, parse_message
 from hoseline.studio.session import Session, StudioError
 from hoseline.studio.uploads import MAX_FILES, SIZE_LIMITS, UploadError, checked_name, mount_labels, open_upload
-from hoseline.studio.view import session_message, state_message
+from hoseline.studio.view import readouts_message, session_message, state_message
 
 STATIC = Path(__file__).parent / "static"
 IDLE_SECONDS = 0.3
@@ -82,18 +84,20 @@ class Studio:
         self.reports.mkdir(parents=True, exist_ok=True)
         self.coalesced = 0  # targets dropped for a later one, over all connections
         self.abandoned = 0  # idle comparisons given up for a message
+        self.readouts_pending = False  # the last state sent left readouts pending (a drag's step)
 
     async def run(self, function, *args):
         """function(*args) in the solver thread."""
         return await asyncio.get_running_loop().run_in_executor(self.solver, functools.partial(function, *args))
 
-    def state_text(self, seq: int | None, started: float | None = None) -> str:
+    def state_text(self, seq: int | None, started: float | None = None, complete: bool = True) -> str:
         """The state message as JSON (called in the solver thread).
 
         started: time.perf_counter() when the solver took up the message answered; the state then
         says how long the solver thread spent on it (seconds, without the final JSON encoding).
+        complete: False leaves the readouts that cost most pending (view.state_message).
         """
-        message = state_message(self.session)
+        message = state_message(self.session, complete)
         message["seq"] = seq
         message["server_seconds"] = None if started is None else time.perf_counter() - started
         return json.dumps(message, allow_nan=False)
@@ -129,14 +133,17 @@ class Studio:
             await websocket.send_text(await self.run(self.session_text))
             await websocket.send_text(await self.run(self.state_text, None))
             while not receiver.done():
-                waiting = asyncio.create_task(inbox.get(IDLE_SECONDS if self.session.comparison is None else None))
+                idle_work = self.readouts_pending or self.session.comparison is None
+                waiting = asyncio.create_task(inbox.get(IDLE_SECONDS if idle_work else None))
                 await asyncio.wait({waiting, receiver}, return_when=asyncio.FIRST_COMPLETED)
                 if not waiting.done():
                     waiting.cancel()
                     break
                 message = waiting.result()
                 if message is None:
-                    await self._compare_while_idle(inbox)
+                    await self._complete_readouts()
+                    if self.session.comparison is None:
+                        await self._compare_while_idle(inbox)
                 else:
                     await self._handle(websocket, message)
                 self.coalesced = max(self.coalesced, inbox.coalesced)
@@ -157,6 +164,13 @@ class Studio:
                 inbox.put(parse_message(text))
             except MessageError as exc:
                 await websocket.send_text(json.dumps({"type": "error", "message": str(exc)}))
+
+    async def _complete_readouts(self) -> None:
+        """Send every page the readouts a drag's states left pending (in the solver thread; a few ms)."""
+        if self.readouts_pending:
+            text = await self.run(lambda: json.dumps(readouts_message(self.session), allow_nan=False))
+            self.readouts_pending = False
+            await self.broadcast(text)
 
     async def _compare_while_idle(self, inbox: Inbox) -> None:
         """Compare with a fresh placement (in the solver thread) and tell every page, unless a message arrives in
@@ -181,7 +195,7 @@ class Studio:
             await websocket.send_text(error)
         await websocket.send_text(state)
         if len(self.sockets) > 1:
-            await self.broadcast(await self.run(self.state_text, None), skip=websocket)
+            await self.broadcast(await self.run(self.state_text, None, None, not self.readouts_pending), skip=websocket)
 
     def _compare(self, abandon: threading.Event) -> str | None:
         """The comparison with a fresh placement (in the solver thread), as a JSON message; None when `abandon` was
@@ -203,7 +217,7 @@ class Studio:
 
     def _solve(self, message) -> tuple[str | None, str, bool]:
         """Carry out one message in the solver thread: (the error message or None, the state message, as JSON; whether
-        an undo or redo went to another file's session)."""
+        an undo or redo went to another file's session).  A target's state leaves readouts pending (readouts_pending)."""
         started = time.perf_counter()
         error, opened = None, False
         recorded = message.type not in ("undo", "redo") and self.history.before(self.session, message.edit)
@@ -229,7 +243,8 @@ class Studio:
                                 "the shape shown is the last good one", "seq": message.seq})
         if error is not None and recorded:
             self.history.forget()
-        return error, self.state_text(message.seq, started), opened
+        self.readouts_pending = isinstance(message, Target)
+        return error, self.state_text(message.seq, started, not self.readouts_pending), opened
 
     # --- HTTP ---
 

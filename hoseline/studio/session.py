@@ -279,9 +279,10 @@ class Session:
             return Pose()
         return self.sweep.pose(shown.obstacle.body, self.pose_index)
 
-    def result(self) -> Result:
-        """The shape shown as a Result (for the exports and the readouts)."""
-        return self.tracker.result(self.placement.lock_angle_deg)
+    def result(self, complete: bool = True) -> Result:
+        """The shape shown as a Result (for the exports and the readouts); not `complete`: without the readouts that
+        cost most (Tracker.result), for the frames of a drag."""
+        return self.tracker.result(self.placement.lock_angle_deg, complete)
 
     def problem_toml(self, assembled: bool = False) -> str:
         """The problem as a problem file (mounts and hose as now): with the twists at assembly (the end's, each fixed

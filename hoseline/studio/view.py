@@ -24,12 +24,17 @@ from hoseline.studio.warnings import bend_limit, shape_warnings
 if TYPE_CHECKING:
     from hoseline.studio.session import Session
 
+PENDING_READOUTS = ("stability_margin", "min_gap")  # left out of a drag's states (null): the margin, the contacts' gaps
 CLEARANCE_SCALE = 2.0  # the clearance colour map runs from 0 to this many times the required clearance
 
 
-def state_message(session: "Session") -> dict:
-    """The "state" message: everything the page draws after a change."""
-    result = session.result()
+def state_message(session: "Session", complete: bool = True) -> dict:
+    """The "state" message: everything the page draws after a change.
+
+    complete: False (a drag's step) sends the readouts that cost most as pending (PENDING_READOUTS: null, named in
+    the readouts' "pending"), for readouts_message to send when the drag pauses.
+    """
+    result = session.result(complete)
     problem = session.problem
     radius = problem.hose.outer_radius
     clearance, nearest = _clearances(session, result.centerline, radius)
@@ -67,31 +72,46 @@ def state_message(session: "Session") -> dict:
         },
         "obstacle_poses": [_matrix(session.obstacle_pose(shown)) for shown in session.obstacles],
         "pose": session.pose_index,
-        "readouts": {
-            "min_clearance": nearest,
-            "min_bend_radius": _finite_or_none(result.min_bend_radius),
-            "bend_limit": bend_limit(problem),
-            "warnings": shape_warnings(problem, result),
-            "start_force": result.start_force.tolist(),
-            "start_moment": result.start_moment.tolist(),
-            "end_force": result.end_force.tolist(),
-            "end_moment": result.end_moment.tolist(),
-            "lock_angle": session.placement.lock_angle_deg,
-            "single_plane_offset": result.single_plane_offset,
-            "stability_margin": result.stability_margin,
-            "max_twisting_moment": result.max_twisting_moment,
-            "free_length": problem.hose.length,
-            "overall_length": None if problem.fittings is None else problem.fittings.overall_length(problem.hose.length),
-            "contacts": [
-                {"name": c.name, "kind": c.kind, "min_gap": _finite_or_none(c.min_gap),
-                 "total_force": c.total_force.tolist(), "length_in_contact": c.length_in_contact}
-                for c in result.contacts
-            ],
-        },
+        "readouts": _readouts(session, result, nearest, complete),
         "step": None if step is None else {
             "iterations": step.iterations, "seconds": step.seconds, "events": step.events, "movement": step.movement,
         },
         "comparison": session.comparison,
+    }
+
+
+def readouts_message(session: "Session") -> dict:
+    """The "readouts" message: the complete readouts of the shape shown, for a page sent them pending (state_message
+    with complete=False)."""
+    result = session.result()
+    nearest = _clearances(session, result.centerline, session.problem.hose.outer_radius)[1]
+    return {"type": "readouts", "readouts": _readouts(session, result, nearest, True)}
+
+
+def _readouts(session: "Session", result: Result, nearest: list[dict], complete: bool) -> dict:
+    """The readouts of `result` (session.result(complete)); nearest: each shown obstacle's nearest approach."""
+    problem = session.problem
+    return {
+        "min_clearance": nearest,
+        "min_bend_radius": _finite_or_none(result.min_bend_radius),
+        "bend_limit": bend_limit(problem),
+        "warnings": shape_warnings(problem, result),
+        "start_force": result.start_force.tolist(),
+        "start_moment": result.start_moment.tolist(),
+        "end_force": result.end_force.tolist(),
+        "end_moment": result.end_moment.tolist(),
+        "lock_angle": session.placement.lock_angle_deg,
+        "single_plane_offset": result.single_plane_offset,
+        "stability_margin": result.stability_margin,
+        "max_twisting_moment": result.max_twisting_moment,
+        "free_length": problem.hose.length,
+        "overall_length": None if problem.fittings is None else problem.fittings.overall_length(problem.hose.length),
+        "contacts": [
+            {"name": c.name, "kind": c.kind, "min_gap": _finite_or_none(c.min_gap),
+             "total_force": c.total_force.tolist(), "length_in_contact": c.length_in_contact}
+            for c in result.contacts
+        ],
+        "pending": [] if complete else list(PENDING_READOUTS),
     }
 
 

@@ -191,13 +191,15 @@ def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: R
 
 
 def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel,
-                 stability: bool = True) -> Result:
+                 stability: bool = True, locate_gaps: bool = True) -> Result:
     """The Result of a placement with contact completed: contacts per obstacle, the internal force (and the start
     mount's reaction) with the contact loads, the stability margin with the barrier, each obstacle's smallest gap
     to the whole assembly and where it is (contact/nearest.py).  Raises PlacementError if the hose enters anything
     (a smallest gap below zero): the solver's guarantee failed.
     stability: False leaves the rod's margin without the barrier in place (a dense eigenvalue problem saved), for a
-    result whose forces only are read (the error estimates' other solves)."""
+    result whose forces only are read (the error estimates' other solves).
+    locate_gaps: False leaves each obstacle's smallest gap to the whole assembly unlocated (min_gap NaN, its place None; the
+    search saved), for a result whose gaps are read later (a studio drag)."""
     problem = result.problem
     result.contacts, beyond = contact_reports(problem, props, clamps, state, model)
     gaps = [contact.min_gap for contact in result.contacts]
@@ -205,12 +207,16 @@ def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: Ro
         worst = result.contacts[int(np.argmin(gaps))]
         raise PlacementError(f"placement with contact: the converged shape enters {worst.name!r} by {-worst.min_gap:.3g} mm; "
                              "this is a solver error, please report it with the problem file")
-    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
-    nearest = nearest_gaps(problem, model, nodes)  # the whole assembly: fittings and the start station too
-    result.contacts = [contact if contact.name not in nearest else
-                       replace(contact, min_gap=min(contact.min_gap, nearest[contact.name].gap),
-                               min_gap_on=nearest[contact.name].on, min_gap_arc_length=nearest[contact.name].arc_length)
-                       for contact in result.contacts]
+    if locate_gaps:
+        nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+        nearest = nearest_gaps(problem, model, nodes)  # the whole assembly: fittings and the start station too
+        result.contacts = [contact if contact.name not in nearest else
+                           replace(contact, min_gap=min(contact.min_gap, nearest[contact.name].gap),
+                                   min_gap_on=nearest[contact.name].on,
+                                   min_gap_arc_length=nearest[contact.name].arc_length)
+                           for contact in result.contacts]
+    else:
+        result.contacts = [replace(contact, min_gap=math.nan) for contact in result.contacts]
     result.internal_force = result.internal_force + beyond
     result.start_force = -result.internal_force[0]
     if stability:

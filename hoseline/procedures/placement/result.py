@@ -130,7 +130,8 @@ class ObstacleContact:
 
     name, kind: as in the problem ("plane", "sphere", "cylinder", "box", "mesh"; "self" for self-contact).
     min_gap: smallest gap between the assembly's surface (the hose and its end fittings) and the obstacle, mm
-    (>= 0 for the hose, which is kept out; negative where a rigid end fitting enters it; inf if never near);
+    (>= 0 for the hose, which is kept out; negative where a rigid end fitting enters it; inf if never near; nan if not
+    evaluated, as in the studio's result during a drag: contact/placement.with_contact, gaps=False);
     min_gap_on: where it is, "hose", "start fitting" or "end fitting"; min_gap_arc_length: mm along the assembly
     from the start outlet, at the middle of the nearest segment (negative on the start fitting, beyond the hose
     length on the end fitting; nan if not located, as in a sweep's pose reports, which give the hose's gap).
@@ -200,7 +201,7 @@ class Result:
     stability_margin: smallest eigenvalue of the second variation of the energy over rotation
         fields compatible with the clamps, per unit length (the discrete Hessian's eigenvalue
         divided by the segment length, so it converges under refinement), N*mm/(rad^2*mm) = N/rad^2;
-        > 0 means stable.
+        > 0 means stable; None if not evaluated (the studio's result during a drag: build_result, stability=False).
     lock_angle_deg: torque-free roll angle of the end fitting found in the placement, degrees.
     min_bend_radius: smallest inside bend radius reached (centreline radius - outer radius), mm.
     bend_radius_margin: min_bend_radius - hose.min_bend_radius, mm; None if the hose has no limit.
@@ -248,7 +249,7 @@ class Result:
     end_moment: np.ndarray
     elastic_energy: float
     gravity_energy: float
-    stability_margin: float
+    stability_margin: float | None
     lock_angle_deg: float
     min_bend_radius: float
     bend_radius_margin: float | None

@@ -29,6 +29,24 @@ def neutral_scale(props: RodProperties, clamps: Clamps, state: RodState) -> floa
     return max(props.largest_stiffness / props.length**2, weight, float(np.linalg.norm(state.end_force)))
 
 
+def _stability_margin(props: RodProperties, clamps: Clamps, state: RodState, system, events: list[str]) -> float:
+    """The stability margin of `state` (N/rad^2: the smallest eigenvalue of the second variation per unit length,
+    so independent of the segment count; 0 when neutral, which `events` is then told).  system: evaluate()'s."""
+    h = props.segment_length
+    if isinstance(system, clipped_newton.SlidingSystem):
+        values = [clipped_newton.smallest_sliding_eigenvalue(system, h)]
+    else:
+        values, _ = smallest_eigenpairs(system.band, system.jac_t, count=1)
+    margin = float(values[0]) / h
+    if abs(margin) < NEUTRAL_MARGIN * neutral_scale(props, clamps, state):
+        events.append(
+            "neutral stability: one way of deforming costs no energy (a symmetry of the mounts, e.g. "
+            "turning the whole hose about the common axis of both fittings); the shape is not unique"
+        )
+        return 0.0
+    return margin
+
+
 def build_result(
     problem: Problem,
     props: RodProperties,
@@ -38,11 +56,14 @@ def build_result(
     log,
     started: float,
     residual: float,
+    stability: bool = True,
 ) -> Result:
     """Result of an equilibrium `state` under the final `clamps` (roll locked).
 
     lock_angle_deg: degrees.  log: ContinuationLog with counters and events.
     started: time.perf_counter() at the start of the solve.  residual: final relative residual.
+    stability: False leaves the stability margin out (None; an eigenvalue problem saved), for a result whose margin
+    is found otherwise (with the contact barrier: contact/placement.with_contact) or later (a studio drag).
     """
     h = props.segment_length
     if clamps.clips:  # each segment of its own length: a sliding clip stretches its spans
@@ -61,18 +82,8 @@ def build_result(
     for clip in clips:  # the clips beyond a station hold the part beyond it too
         internal_force[s < clip.arc_length - 0.5 * float(np.min(lengths))] += clip.force
     system = evaluate(props, clamps, state)
-    if isinstance(system, clipped_newton.SlidingSystem):
-        values = [clipped_newton.smallest_sliding_eigenvalue(system, h)]
-    else:
-        values, _ = smallest_eigenpairs(system.band, system.jac_t, count=1)
-    margin = float(values[0]) / h  # per unit length: independent of the segment count
     events = list(log.events)
-    if abs(margin) < NEUTRAL_MARGIN * neutral_scale(props, clamps, state):
-        margin = 0.0
-        events.append(
-            "neutral stability: one way of deforming costs no energy (a symmetry of the mounts, e.g. "
-            "turning the whole hose about the common axis of both fittings); the shape is not unique"
-        )
+    margin = _stability_margin(props, clamps, state, system, events) if stability else None
     max_curvature = float(np.max(curvature))
     radius_outer = problem.hose.outer_radius
     min_radius = (1.0 / max_curvature - radius_outer) if max_curvature > 0.0 else math.inf

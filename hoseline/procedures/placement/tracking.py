@@ -155,15 +155,19 @@ class Tracker:
         movement = float(np.max(np.linalg.norm(self.centerline - before, axis=1)))
         return Step(self.log.iterations - counted, time.perf_counter() - started, self.log.events[logged:], movement)
 
-    def result(self, lock_angle_deg: float) -> Result:
+    def result(self, lock_angle_deg: float, complete: bool = True) -> Result:
         """The tracked equilibrium as a Result (stations, moments, reactions, stability margin).
 
         lock_angle_deg: the lock angle of the placement it started from, degrees.
+        complete: False leaves out what a drawn frame does not need and costs most (the stability margin: None; each
+        obstacle's smallest gap to the whole assembly: NaN), to be read from a complete result later.
         """
+        barrier = self.contact is not None  # its margin replaces the rod's: the rod's is not found
         result = build_result(self.problem, self.props, self.clamps, self.state, lock_angle_deg, self.log,
-                              time.perf_counter(), self.residual)
-        if self.contact is not None:
-            result = contact_placement.with_contact(result, self.props, self.clamps, self.state, self.contact)
+                              time.perf_counter(), self.residual, stability=complete and not barrier)
+        if barrier:
+            result = contact_placement.with_contact(result, self.props, self.clamps, self.state, self.contact,
+                                                    stability=complete, locate_gaps=complete)
         return result
 
     def _move_fittings(self, props: RodProperties, old: Clamps, new: Clamps, state: RodState,

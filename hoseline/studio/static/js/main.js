@@ -71,6 +71,8 @@ function receive(message) {
   } else if (message.type === 'state') {
     panel.messages.carriedOut(message.seq);
     draw(message);
+  } else if (message.type === 'readouts') {  // those a drag's states left pending (studio/server.py)
+    if (state) { state.readouts = message.readouts; showSoon(state); }
   } else if (message.type === 'comparison') {
     if (state) { state.comparison = message.comparison; showSoon(state); }
   } else if (message.type === 'error') {

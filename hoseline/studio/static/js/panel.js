@@ -7,6 +7,7 @@ import { MessageList } from './message_list.js';
 // numbers for display: rounding noise (below 1e-9) shown as 0
 const clean = (x) => (Math.abs(x) < 1e-9 ? 0 : Number(x));
 const fmt = (x, digits = 4) => (x === null || x === undefined ? '—' : clean(x).toPrecision(digits));
+const PENDING = '… (when the drag pauses)';  // a readout the server sends once a drag pauses (studio/server.py)
 const exact = (x) => String(Number(clean(x).toFixed(6)));  // in the number boxes: up to 1e-6
 const norm = (v) => Math.hypot(...v);
 const vector = (v, unit) => `${fmt(norm(v))} ${unit} [${v.map((x) => fmt(x, 3)).join(', ')}]`;
@@ -197,8 +198,10 @@ export class Panel {
     this.readouts(state);
   }
 
+  /** The readouts table; those the server left pending during a drag (readouts.pending) show PENDING, greyed,
+   * until its "readouts" message comes: never a stale value. */
   readouts(state) {
-    const r = state.readouts, rows = [];
+    const r = state.readouts, rows = [], pending = new Set(r.pending);
     for (const near of r.min_clearance) {
       const ok = near.distance >= near.required;
       rows.push([`clearance to ${near.name}`, `${fmt(near.distance)} mm (required ${fmt(near.required)}) at s = ${fmt(near.s)} mm`, ok]);
@@ -215,18 +218,21 @@ export class Panel {
       rows.push([`${end} reaction`, [vector(r[`${end}_force`], 'N'), vector(r[`${end}_moment`], 'N·mm'), ...reactionWarnings],
         reactionWarnings.length ? false : null, `${end}_reaction`]);
     }
+    const gapPending = pending.has('min_gap');
     for (const c of r.contacts) {
       const touching = c.total_force.some((v) => v !== 0);  // a point contact lies on no length
+      const gap = gapPending ? PENDING : c.min_gap === null ? 'far' : `${fmt(c.min_gap, 4)} mm`;
       rows.push([`contact with ${c.name}`, touching
-        ? [vector(c.total_force, 'N'), `${c.length_in_contact > 0 ? `lying on ${fmt(c.length_in_contact)} mm` : 'at a point'}, least gap ${fmt(c.min_gap, 4)} mm`]
-        : `not touching (least gap ${c.min_gap === null ? 'far' : `${fmt(c.min_gap)} mm`})`, null]);
+        ? [vector(c.total_force, 'N'), `${c.length_in_contact > 0 ? `lying on ${fmt(c.length_in_contact)} mm` : 'at a point'}, least gap ${gap}`]
+        : `not touching (least gap ${gap})`, gapPending ? 'pending' : null]);
     }
     state.clips.forEach((clip, k) => rows.push([`clip ${clip.name || k + 1} (${clip.kind})`,
       [vector(clip.force, 'N'), ...(clip.kind === 'ball' ? [] : [vector(clip.moment, 'N·mm')]), `at s = ${fmt(clip.arc_length)} mm`], null]));
     rows.push(['max twisting moment', `${fmt(r.max_twisting_moment)} N·mm`, null]);
     rows.push(['lock angle (placement)', `${fmt(r.lock_angle)}°`, null]);
     rows.push(['single-plane offset', r.single_plane_offset === null ? 'undefined (parallel directions)' : `${fmt(r.single_plane_offset)} mm`, null]);
-    rows.push(['stability margin', `${fmt(r.stability_margin)} N/rad²`, r.stability_margin >= 0]);
+    rows.push(['stability margin', pending.has('stability_margin') ? PENDING : `${fmt(r.stability_margin)} N/rad²`,
+      pending.has('stability_margin') ? 'pending' : r.stability_margin >= 0, 'stability_margin']);
     const comparison = state.comparison;
     const known = comparison && !comparison.failed;
     const checked = known && comparison.unique !== null;  // null: a search could not be followed, not known
@@ -239,7 +245,7 @@ export class Panel {
       const th = document.createElement('td'); th.textContent = name;
       const td = document.createElement('td');
       [value].flat().forEach((line, k) => td.append(...(k ? [document.createElement('br')] : []), line));
-      if (ok !== null) td.className = ok ? 'good' : 'bad';
+      if (ok !== null) td.className = ok === 'pending' ? 'pending' : ok ? 'good' : 'bad';
       tr.append(th, td);
       return tr;
     }));
