@@ -52,7 +52,7 @@ def test_sensitivities_match_finite_differences_of_full_placements():
     worst = 0.0
     for j in range(len(COORDINATES)):
         reference = (4.0 * central(j, steps[j] / 2.0) - central(j, steps[j])) / 3.0
-        quantities, stations = reference[:3], reference[3:]
+        quantities, stations = np.split(reference, [sensitivities.values.size])
         ours = sensitivities.derivatives[:, j]
         # per quantity relative to its derivative, or to its value per unit of the parameter's scale if that is larger
         scale = np.abs(quantities) + np.abs(sensitivities.values) / (step_sizes(problem)[j] / 1e-7)

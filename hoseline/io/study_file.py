@@ -46,12 +46,19 @@
     distribution = "normal"
     sigma = 0.5
 
+    [[obstacles]]                      # optional, a placement's base only (a sweep's are in the sweep file):
+    name = "bracket"                   #   fixed obstacles the clearance is measured to (a quantity each,
+    file = "bracket.stl"               #   clearance:NAME; the placement does not see them); as a sweep file's
+    clearance = 5.0                    #   [[obstacles]] without body
+
     [limits]                           # each optional
     bend_radius = 35.0                 # mm, at least (default: the hose's min_bend_radius)
     clearance = 20.0                   # mm, at least, every obstacle (default: each obstacle's clearance)
     "clearance:strut" = 15.0           # one obstacle
     end_torque = 2000.0                # N*mm, at most
     twist_rate = 0.1                   # deg/mm, at most
+    "force:end" = 50.0                 # N, at most: the force of a support on the hose (start, end, clips[k])
+    "moment:clips[0]" = 900.0          # N*mm, at most: its moment (not for a ball clip)
     deviation = 10.0                   # mm from the nominal shape, at most
 
     [design]                           # optional: which length and clocking to choose
@@ -61,6 +68,8 @@
     clocking_step = 15.0               # degrees
     samples = 0                        # tolerance samples judged per candidate (0: the nominal hose)
     rank_by = "clearance:strut"        # optional: the limited quantity whose margin ranks the candidates
+    rank_on = "nominal"                # or "p95_margin": by the 5th percentile of that margin over the
+                                       #   tolerances, first order at each candidate (needs [[vary]])
     method = "grid"                    # or "optimise": per length, the best clocking between grid points
 
     [reliability]                      # optional: rare failures (FORM, SORM, importance sampling)
@@ -86,8 +95,10 @@ import numpy as np
 from pydantic import AfterValidator, ConfigDict, Field, model_validator
 
 from hoseline.io.problem_file import ProblemFileError, _Section, _validated, load_problem, read_toml
+from hoseline.io.sweep_file import ObstacleSection, _obstacle
 from hoseline.procedures.variation.design_search import DesignGrid, default_rank_by
-from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
+from hoseline.procedures.variation.fixed_obstacles import FixedObstacles
+from hoseline.procedures.variation.quantities import CLEARANCE, Limit
 from hoseline.procedures.variation.rare import Reliability
 from hoseline.procedures.variation.samples import StudyBase
 from hoseline.procedures.variation.study import GlobalSensitivity, Sampling, Study
@@ -187,6 +198,7 @@ class StudyFile(_Section):
     worst_case: bool = False
     sampling: SamplingSection = Field(default_factory=SamplingSection)
     vary: list[VarySection] = Field(default_factory=list)
+    obstacles: list[ObstacleSection] = Field(default_factory=list)
     limits: dict[str, float] = Field(default_factory=dict)
     design: DesignSection | None = None
     reliability: ReliabilitySection | None = None
@@ -210,6 +222,8 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
     spec = _validated(StudyFile, data, str(path), error=StudyFileError)
     base_path = path.parent / spec.base
     base, text = _base(base_path, str(path), spec.base)
+    if spec.obstacles:
+        base = _with_obstacles(base, spec.obstacles, path)
     variation = Variation(tuple(_tolerance(item, k, base, str(path)) for k, item in enumerate(spec.vary)),
                           clips=len(base.problem.clips))
     if any(clip.kind == "sliding" for clip in base.problem.clips) and spec.sampling.start == "nominal":
@@ -249,6 +263,28 @@ def _base(path: Path, source: str, given: str) -> tuple[StudyBase, str]:
         return StudyBase(load_problem(path)), text
     except ProblemFileError as exc:
         raise StudyFileError(f"{source}: base = \"{given}\": {exc}") from None
+
+
+def _with_obstacles(base: StudyBase, sections: list[ObstacleSection], path: Path) -> StudyBase:
+    """The placement base with the fixed obstacles of [[obstacles]] (their meshes read, relative to the study file)."""
+    source = str(path)
+    if base.sweep is not None:
+        raise StudyFileError(f"{source}: [[obstacles]] with a sweep file as the base: a sweep's obstacles are its "
+                             "own; give them in the sweep file's [[obstacles]] and remove them here")
+    for k, section in enumerate(sections):
+        if section.body is not None:
+            raise StudyFileError(f"{source}: obstacles[{k}].body = \"{section.body}\": a placement study's obstacles "
+                                 "are fixed; remove body (or study a sweep file, whose obstacles move with bodies)")
+    try:
+        obstacles = tuple(_obstacle(section, path.parent, source) for section in sections)
+    except ProblemFileError as exc:
+        raise StudyFileError(str(exc)) from None
+    names = [o.name for o in obstacles]
+    for k, name in enumerate(names):
+        if name in names[:k]:
+            raise StudyFileError(f"{source}: obstacles[{k}].name = \"{name}\" is used by an earlier obstacle: give "
+                                 "each obstacle its own name")
+    return StudyBase(base.problem, obstacles=FixedObstacles(obstacles))
 
 
 def _scalar(value, name: str) -> float:
@@ -340,20 +376,21 @@ def _tolerance(item: VarySection, k: int, base: StudyBase, source: str) -> Toler
 
 def _limits(given: dict[str, float], base: StudyBase, source: str) -> tuple[Limit, ...]:
     """The limits: the file's, over the defaults (the hose's minimum bend radius, each obstacle's clearance)."""
-    known = {q.name: q for q in quantities(base.obstacle_names)}
+    known = {q.name: q for q in base.quantities}
     values: dict[str, float] = {}
     if base.problem.hose.min_bend_radius is not None:
         values["bend_radius"] = base.problem.hose.min_bend_radius
-    for obstacle in () if base.sweep is None else base.sweep.obstacles:
+    obstacles = base.sweep.obstacles if base.sweep is not None else () if base.obstacles is None else base.obstacles.obstacles
+    for obstacle in obstacles:
         values[f"{CLEARANCE}{obstacle.name}"] = obstacle.clearance
     for name, value in given.items():
         if not math.isfinite(value):
             raise StudyFileError(f"{source}: limits.{name} = {value!r}: must be a finite number")
         if name == "clearance":
-            if base.sweep is None or not base.sweep.obstacles:
-                raise StudyFileError(f"{source}: limits.clearance: the base has no obstacles; remove it or use a sweep "
-                                     "file with [[obstacles]] as the base")
-            values.update({f"{CLEARANCE}{o.name}": value for o in base.sweep.obstacles})
+            if not obstacles:
+                raise StudyFileError(f"{source}: limits.clearance: the base has no obstacles; remove it, give "
+                                     "[[obstacles]] (a placement) or use a sweep file with [[obstacles]] as the base")
+            values.update({f"{CLEARANCE}{o.name}": value for o in obstacles})
         elif name in known:
             values[name] = value
         else:

@@ -42,7 +42,8 @@ def fingerprint(study_text: str, base_text: str, study: Study) -> str:
     for text in (study_text, base_text):
         digest.update(text.encode("utf-8"))
     sweep = study.base.sweep
-    for obstacle in () if sweep is None else sweep.obstacles:
+    fixed = () if study.base.obstacles is None else study.base.obstacles.obstacles
+    for obstacle in fixed if sweep is None else sweep.obstacles:
         digest.update(np.ascontiguousarray(obstacle.vertices, dtype=float).tobytes())
         digest.update(np.ascontiguousarray(obstacle.faces, dtype=np.int64).tobytes())
     for motion in () if sweep is None else sweep.motions:
@@ -160,6 +161,26 @@ def sensitivities_csv(outcome: StudyOutcome) -> str:
                                              "unit": [variation.units[k] for k in varied]}
     for q, name in enumerate(names):
         columns[f"d {name} [{units[name]} per unit]"] = derivatives[q, list(varied)]
+    return _table(columns)
+
+
+def station_sensitivities_csv(outcome: StudyOutcome) -> str:
+    """Per station of the nominal hose (of a sweep: at its first pose) and varied coordinate: the derivative of the
+    station's position (mm per unit of the coordinate), one row each; its arc length along the nominal hose (mm)."""
+    derivatives = outcome.first_order.station_derivatives
+    variation = outcome.study.variation
+    varied = list(variation.varied)
+    stations = derivatives.shape[0]
+    arc = np.linspace(0.0, outcome.study.base.problem.hose.length, stations)
+    moved = derivatives[:, :, varied]  # (stations, 3, varied)
+    columns: dict[str, list | np.ndarray] = {
+        "station": np.repeat(np.arange(stations), len(varied)),
+        "arc_length [mm]": np.repeat(arc, len(varied)),
+        "coordinate": [variation.names[k] for k in varied] * stations,
+        "unit": [variation.units[k] for k in varied] * stations,
+    }
+    for axis, name in enumerate("xyz"):
+        columns[f"d{name} [mm per unit]"] = moved[:, axis, :].ravel()
     return _table(columns)
 
 
@@ -313,6 +334,7 @@ def write_study_data(outcome: StudyOutcome, folder: Path, base_path: Path) -> No
     _write_corners(outcome, folder, base_path)
     if outcome.first_order is not None:
         write_text(folder / "sensitivities.csv", sensitivities_csv(outcome))
+        write_text(folder / "station_sensitivities.csv", station_sensitivities_csv(outcome))
     if outcome.design is not None:
         write_text(folder / "design.csv", design_csv(outcome))
         write_text(folder / "design_grid.csv", design_grid_csv(outcome))

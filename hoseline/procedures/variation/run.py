@@ -22,9 +22,8 @@ from hoseline.procedures.variation.rare import RareEvent, RareTask, RareUnion, r
 from hoseline.procedures.variation.reliability import importance_estimate, importance_points, union_first_order
 from hoseline.procedures.variation.scheduler import scheduler_address
 from hoseline.procedures.variation.samples import StudyContext, nominal_context
-from hoseline.procedures.variation.sensitivity import placement_sensitivities
 from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
-from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities
+from hoseline.procedures.variation.sweep_sensitivity import study_sensitivities
 from hoseline.procedures.variation.worst_case import WorstCase, worst_cases
 
 
@@ -71,10 +70,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         sensitivities = None
         if study.sensitivities and study.variation.tolerances:
             try:
-                if study.base.sweep is not None:
-                    sensitivities = sweep_sensitivities(study.base.sweep, study.variation.varied)
-                else:
-                    sensitivities = placement_sensitivities(study.base.problem, study.variation.varied)
+                sensitivities = study_sensitivities(study.base, study.base.problem, study.variation.varied)
             except (PlacementError, ValueError) as exc:
                 notes.append(f"no sensitivities: {exc}")
             else:
