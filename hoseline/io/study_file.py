@@ -168,6 +168,7 @@ class DesignSection(_Section):
     clocking_step: Positive = 15.0
     samples: Annotated[int, Field(ge=0)] = 0
     rank_by: str | None = None
+    rank_on: Literal["nominal", "p95_margin"] = "nominal"
     method: Literal["grid", "optimise"] = "grid"
 
 
@@ -421,7 +422,20 @@ def _design(section: DesignSection, base: StudyBase, limits: tuple[Limit, ...], 
     if rank_by not in names:
         raise StudyFileError(f"{source}: design.rank_by = \"{rank_by}\": not a limited quantity; choose one of "
                              f"{', '.join(names)}")
-    return DesignGrid(lengths, clockings, rank_by, section.samples, section.method)
+    if section.rank_on == "p95_margin":
+        if sampling.count == 0:
+            raise StudyFileError(f"{source}: design.rank_on = \"p95_margin\" needs [[vary]] tolerances (the margins are "
+                                 "judged over their samples): give some, or rank_on = \"nominal\"")
+        if section.samples:
+            raise StudyFileError(f"{source}: design.samples = {section.samples} with rank_on = \"p95_margin\": both judge "
+                                 "the 5th percentile of margin (by solved samples, or to first order): give samples = 0 "
+                                 "or remove rank_on")
+        uncovered = _uncovered_sensitivities(base)
+        if uncovered:
+            raise StudyFileError(f"{source}: design.rank_on = \"p95_margin\": the base has {uncovered}, whose "
+                                 "sensitivities are not covered (docs/variation.md); judge the candidates by samples "
+                                 "(design.samples) instead")
+    return DesignGrid(lengths, clockings, rank_by, section.samples, section.method, section.rank_on)
 
 
 def _reliability(section: ReliabilitySection, base: StudyBase, variation: Variation, limits: tuple[Limit, ...],
@@ -430,10 +444,7 @@ def _reliability(section: ReliabilitySection, base: StudyBase, variation: Variat
     sensitivities are covered."""
     if not variation.tolerances:
         raise StudyFileError(f"{source}: [reliability] needs [[vary]] tolerances: give some, or remove [reliability]")
-    problem = base.problem
-    uncovered = ("stiffener springs" if problem.hose.stiffeners is not None else
-                 "a sliding clip" if any(clip.kind == "sliding" for clip in problem.clips) else
-                 "clips in a sweep" if base.sweep is not None and problem.clips else None)
+    uncovered = _uncovered_sensitivities(base)
     if uncovered:
         raise StudyFileError(f"{source}: [reliability]: the base has {uncovered}, whose sensitivities FORM needs are "
                              "not covered (docs/variation.md); remove [reliability] and judge the limits by sampling")
@@ -446,6 +457,15 @@ def _reliability(section: ReliabilitySection, base: StudyBase, variation: Variat
             raise StudyFileError(f"{source}: reliability.limits[{k}] = \"{name}\": not a limit FORM can judge; choose "
                                  f"one of {', '.join(smooth)} (given in [limits]; the deviation has no derivative)")
     return Reliability(section.method, section.importance_samples, tuple(section.limits), section.seed)
+
+
+def _uncovered_sensitivities(base: StudyBase) -> str | None:
+    """What in the base the sensitivities do not cover (stiffener springs, a sliding clip, clips in a sweep), or
+    None."""
+    problem = base.problem
+    return ("stiffener springs" if problem.hose.stiffeners is not None else
+            "a sliding clip" if any(clip.kind == "sliding" for clip in problem.clips) else
+            "clips in a sweep" if base.sweep is not None and problem.clips else None)
 
 
 def _steps(pair: list[float], step: float) -> tuple[float, ...]:

@@ -15,7 +15,8 @@ from typing import Protocol
 import numpy as np
 
 from hoseline.procedures.placement.continuation import PlacementError, Progress
-from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
+from hoseline.procedures.variation.design_search import (FirstOrderCandidate, RefineTask, first_order_candidate, judge,
+                                                        ranked_refinements, refine_length, refine_tasks)
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
 from hoseline.procedures.variation.global_sensitivity import sobol_indices
 from hoseline.procedures.variation.rare import RareEvent, RareTask, RareUnion, rare_event, standard_normal_deviations
@@ -86,11 +87,20 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         design_samples = None
         if study.design is not None:
             grid = study.design
-            deviations = coordinates[:grid.samples] if grid.samples else np.zeros((1, study.variation.width))
-            rows = grid.coordinates(study.base.problem.hose.length, study.base.problem.end_twist_deg, deviations)
+            problem = study.base.problem
             tick = time.perf_counter()
             cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose
-            design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
+            if grid.first_order:
+                deviations = coordinates
+                candidates = [FirstOrderCandidate(offset, deviations, study.variation.varied) for offset in
+                              grid.offsets(problem.hose.length, problem.end_twist_deg, study.variation.width)]
+                found = _stored_map(engine, first_order_candidate, cold, candidates, stores("design"), "design",
+                                    progress)
+                design_samples = merge_batches(found)
+            else:
+                deviations = coordinates[:grid.samples] if grid.samples else np.zeros((1, study.variation.width))
+                rows = grid.coordinates(problem.hose.length, problem.end_twist_deg, deviations)
+                design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
             timings["design"] = time.perf_counter() - tick
         corners = None
         if study.worst_case and sensitivities is not None:
@@ -117,8 +127,8 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
             design = judge(study.design, design_limits, names, design_samples)
             if grid.method == "optimise":
                 tick = time.perf_counter()
-                tasks = refine_tasks(design, names, study.base.problem.hose.length, study.base.problem.end_twist_deg,
-                                     deviations)
+                tasks = refine_tasks(design, names, problem.hose.length, problem.end_twist_deg, deviations,
+                                     study.variation.varied)
                 design.refined = ranked_refinements(tasks, _refine(engine, cold, tasks, stores, progress))
                 timings["optimiser"] = time.perf_counter() - tick
         tick = time.perf_counter()
