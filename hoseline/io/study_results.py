@@ -288,7 +288,8 @@ def study_document(outcome: StudyOutcome) -> dict:
     if outcome.design is not None:
         design = outcome.design
         document["design"] = {"lengths_mm": list(design.grid.lengths), "clockings_deg": list(design.grid.clockings),
-                              "rank_by": design.grid.rank_by, "samples_per_candidate": design.grid.samples,
+                              "rank_by": design.grid.rank_by, "rank_on": design.grid.rank_on,
+                              "samples_per_candidate": design.grid.samples,
                               "method": design.grid.method, "ranking": design.table(),
                               "failure_reasons": design.reasons}
         if design.refined is not None:
