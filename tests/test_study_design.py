@@ -231,6 +231,13 @@ def test_ranking_on_the_p95_margin_chooses_the_candidate_that_keeps_its_margins_
     assert chosen["nominal", 0] == (345.0, -60.0)
     assert chosen["p95_margin", 0] == chosen["nominal", 64] == (340.0, -60.0)
     assert sampled.margins[1, 0, 1] < 0.0  # 345 mm at -60 degrees: the sampled 5th percentile breaks the torque limit
+    # the optimiser judges its clockings the same way: at 345 mm it stops where the torque's P95 margin reaches the
+    # limit (measured -58.97 degrees), between the grid's -60 (refused) and -45 degrees, and beats both
+    grid = DesignGrid((340.0, 345.0), (-60.0, -45.0), "bend_radius", method="optimise", rank_on="p95_margin")
+    study = Study("robust", base, variation, Sampling("sobol", 64, 1), limits, False, grid)
+    refined = {r.length: r for r in run_study(study, where=Where(workers=0)).design.refined}[345.0]
+    assert refined.optimised and -60.0 < refined.clocking < -45.0
+    assert np.all(refined.margins >= 0.0) and refined.margins[1] < 1.0 and refined.margins[0] > 8.82
 
 
 def test_ranking_on_the_p95_margin_with_solved_samples_per_candidate_is_refused():
