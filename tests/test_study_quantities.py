@@ -191,3 +191,29 @@ def test_a_limit_on_a_ball_clips_moment_is_refused(tmp_path):
     (tmp_path / "study.toml").write_text(text, encoding="utf-8")
     result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "out"), "--workers", "0", "-q")
     assert result.exit_code == 2 and "force:clips[0]" in result.output and "moment:end" in result.output, result.output
+
+
+def test_a_design_ranked_on_the_p95_margin_from_a_study_file(quantity_study, tmp_path):
+    """[design] rank_on = "p95_margin" read from the file: the candidates' margins are the first-order 5th
+    percentiles (below the nominal ones for a limit the tolerances move), the report and summary.json say so; with
+    solved samples per candidate too it is refused naming the fields."""
+    folder, _ = quantity_study
+    for name in ("problem.toml", "lid.stl"):
+        (tmp_path / name).write_bytes((folder / name).read_bytes())
+    design = '[design]\nlengths = [330.6, 335.6]\nlength_step = 5.0\nrank_by = "force:end"\nrank_on = "{}"\n'
+    for rank_on in ("nominal", "p95_margin"):
+        text = STUDY.format(force=60.0) + design.format(rank_on)
+        (tmp_path / "study.toml").write_text(text, encoding="utf-8")
+        result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / rank_on), "--workers", "0", "-q")
+        assert result.exit_code == 0, result.output
+    judged = {}
+    for rank_on in ("nominal", "p95_margin"):
+        summary = json.loads((tmp_path / rank_on / "summary.json").read_text(encoding="utf-8"))
+        assert summary["design"]["rank_on"] == rank_on
+        judged[rank_on] = {row["length_mm"]: row["margin force:end [N]"] for row in summary["design"]["ranking"]}
+    assert len(judged["p95_margin"]) == 2 and all(judged["p95_margin"][k] < judged["nominal"][k] for k in judged["nominal"])
+    assert "to first order at the candidate" in (tmp_path / "p95_margin" / "report.html").read_text(encoding="utf-8")
+    (tmp_path / "study.toml").write_text(STUDY.format(force=60.0) + design.format("p95_margin") + "samples = 4\n",
+                                         encoding="utf-8")
+    result = _run(str(tmp_path / "study.toml"), "-o", str(tmp_path / "refused"), "--workers", "0", "-q")
+    assert result.exit_code == 2 and "design.samples = 4 with rank_on" in result.output, result.output
