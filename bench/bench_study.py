@@ -12,9 +12,11 @@
    Newton from the nominal hose (start "nominal").  Target: 60 s.
 2. --sweeps samples of the demo sweep (steer and jounce, every pose, clearance to the strut),
    2 workers.  Target: 300 s.
-3. Scaling: --scaling placement samples on 1 and on 2 workers, --repeats times each, both starts;
-   medians of samples per second and the ratio.
-4. Sensitivities of the demo sweep (every pose, the tolerances below) in this process, --repeats
+3. Scaling: the same --scaling placement samples on 1 and on 2 workers, --repeats times each (1, 2, 1, 2, ...
+   interleaved, so that a change in the machine's load falls on both), both starts; medians of samples per
+   second, the ratio 2 workers / 1 worker (target 1.8), and the workers' CPU per sample of each.  Alone:
+   --command 0 --placements 0 --sweeps 0.
+4. With --sweeps: sensitivities of the demo sweep (every pose, the tolerances below) in this process, --repeats
    times, beside one sample of the same sweep: the median of each and their ratio (what the first
    order costs in samples).
 Tolerances: the end mount within a 1 mm sphere, its direction within a 2 degree cone, the length
@@ -167,15 +169,19 @@ def main() -> None:
               f"ratio {wall / (60.0 * options.command / 10_000):.2f}   ({load()})")
     for start, warm in (("straight", False), ("nominal", True)):
         if options.scaling:
+            runs = {1: [], 2: []}
+            for _ in range(options.repeats):
+                for workers in (1, 2):
+                    runs[workers].append(timed(placement, options.scaling, workers, warm))
             rates = {}
-            for workers in (1, 2):
-                runs = [timed(placement, options.scaling, workers, warm) for _ in range(options.repeats)]
-                wall = statistics.median(run[0] for run in runs)
-                rates[workers] = options.scaling / wall
-                print(f"scaling, start {start}: {options.scaling} placements on {workers} worker(s): median {wall:.2f} s "
-                      f"of {options.repeats}, {rates[workers]:.0f} samples/s, worker CPU "
-                      f"{1e3 * statistics.median(run[2] for run in runs):.2f} ms per sample   ({load()})")
-            print(f"scaling, start {start}: 2 workers / 1 worker = {rates[2] / rates[1]:.2f}")
+            for workers, found in runs.items():
+                walls = sorted(run[0] for run in found)
+                rates[workers] = options.scaling / statistics.median(walls)
+                print(f"scaling, start {start}: {options.scaling} placements on {workers} worker(s): median "
+                      f"{statistics.median(walls):.2f} s of {options.repeats} ({', '.join(f'{w:.2f}' for w in walls)}), "
+                      f"{rates[workers]:.0f} samples/s, worker CPU {1e3 * statistics.median(run[2] for run in found):.2f} "
+                      f"ms per sample   ({load()})")
+            print(f"scaling, start {start}: 2 workers / 1 worker = {rates[2] / rates[1]:.2f} (target 1.8)")
         if options.placements:
             batches, total, cpu, failed = timed(placement, options.placements, 2, warm)
             print(f"placements, start {start}: {options.placements} samples on 2 workers in {batches:.1f} s ({total:.1f} s "
@@ -188,7 +194,7 @@ def main() -> None:
               f"with the cluster's start), {failed} failed, worker CPU {1e3 * cpu:.0f} ms per sample (idle 2 cores: "
               f"{options.sweeps * cpu / 2:.0f} s); target 300 s for 1000: ratio "
               f"{batches / (300.0 * options.sweeps / 1000):.2f}   ({load()})")
-    if options.repeats:
+    if options.sweeps and options.repeats:
         sensitivities, sample = [], []
         for _ in range(options.repeats + 1):  # the first run loads the compiled kernels: not counted
             tick = time.perf_counter()

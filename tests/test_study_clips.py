@@ -152,7 +152,7 @@ def test_sensitivities_with_a_clip_match_finite_differences_of_full_placements(k
     worst = 0.0
     for j in varied:
         reference = (4.0 * central(j, steps[j] / 2.0) - central(j, steps[j])) / 3.0
-        quantities, stations = reference[:3], reference[3:]
+        quantities, stations = np.split(reference, [sensitivities.values.size])
         scale = np.abs(quantities) + np.abs(sensitivities.values) / (step_sizes(problem)[j] / 1e-7)
         worst = max(worst, float(np.max(np.abs(sensitivities.derivatives[:, j] - quantities) / scale)))
         station_error = np.max(np.abs(sensitivities.station_derivatives[:, :, j].ravel() - stations))

@@ -52,7 +52,7 @@ def test_sensitivities_match_finite_differences_of_full_placements():
     worst = 0.0
     for j in range(len(COORDINATES)):
         reference = (4.0 * central(j, steps[j] / 2.0) - central(j, steps[j])) / 3.0
-        quantities, stations = reference[:3], reference[3:]
+        quantities, stations = np.split(reference, [sensitivities.values.size])
         ours = sensitivities.derivatives[:, j]
         # per quantity relative to its derivative, or to its value per unit of the parameter's scale if that is larger
         scale = np.abs(quantities) + np.abs(sensitivities.values) / (step_sizes(problem)[j] / 1e-7)
@@ -123,16 +123,21 @@ def test_without_the_lock_angle_the_sensitivities_are_wrong(monkeypatch):
 def test_tornado_of_a_weightless_hose():
     """A weightless hose's shape does not depend on EI when the torsion factor is kept (the energy only scales):
     a factor-two stiffness spread adds nothing to the bend radius or the twist rate, and dominates the end
-    torque, which scales with EI; the mount tolerance is what moves the shape."""
+    torque, which scales with EI, as do the mounts' forces and moments; the mount tolerance is what moves the
+    shape."""
     problem = demo_problem(90.0, 40)
     variation = Variation((Tolerance("end.point", "sphere", (0.1,)), Tolerance("hose.bending_stiffness", "lognormal", (2.0,))))
     sensitivities = placement_sensitivities(problem, variation.varied)
-    contributions = sensitivities.contributions(variation)  # rows: bend_radius, end_torque, twist_rate
-    bend, torque, twist = contributions
+    contributions = sensitivities.contributions(variation)  # rows: bend_radius, end_torque, twist_rate, reactions
+    bend, torque, twist = contributions[:3]
     assert bend[1] < 1e-6 * bend[0] and twist[1] < 1e-6 * twist[0]
     assert torque[1] > 10.0 * torque[0]
     # the end torque is proportional to EI: d torque / d ln(EI) = torque
     assert sensitivities.derivatives[1, COORDINATES.index("hose.bending")] == pytest.approx(sensitivities.values[1], rel=1e-6)
+    reactions = [k for k, name in enumerate(sensitivities.names) if name.startswith(("force:", "moment:"))]
+    assert len(reactions) == 4
+    assert np.allclose(sensitivities.derivatives[reactions, COORDINATES.index("hose.bending")],
+                       sensitivities.values[reactions], rtol=1e-6)
 
 
 def test_mounts_moved_together_move_the_weightless_hose_rigidly():

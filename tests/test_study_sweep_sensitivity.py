@@ -57,7 +57,7 @@ def test_sweep_sensitivities_match_finite_differences_of_full_sweeps():
         e = np.zeros(len(COORDINATES))
         e[j] = 100.0 * scale_steps[j]
         reference = (_full(sweep, e) - _full(sweep, -e)) / (2.0 * e[j])
-        quantities, stations = reference[:4], reference[4:]
+        quantities, stations = np.split(reference, [sensitivities.values.size])
         # relative to the derivative, or to the value per unit of the parameter's scale if that is larger
         scale = np.abs(quantities) + np.abs(sensitivities.values) / (scale_steps[j] / 1e-7)
         worst = max(worst, float(np.max(np.abs(sensitivities.derivatives[:, j] - quantities) / scale)))

@@ -61,12 +61,19 @@
     matrix = [[1.0, 0.6], [0.6, 1.0]]  #   and directions axis by axis; symmetric, unit diagonal, in [-1, 1],
                                        #   positive definite
 
+    [[obstacles]]                      # optional, a placement's base only (a sweep's are in the sweep file):
+    name = "bracket"                   #   fixed obstacles the clearance is measured to (a quantity each,
+    file = "bracket.stl"               #   clearance:NAME; the placement does not see them); as a sweep file's
+    clearance = 5.0                    #   [[obstacles]] without body
+
     [limits]                           # each optional
     bend_radius = 35.0                 # mm, at least (default: the hose's min_bend_radius)
     clearance = 20.0                   # mm, at least, every obstacle (default: each obstacle's clearance)
     "clearance:strut" = 15.0           # one obstacle
     end_torque = 2000.0                # N*mm, at most
     twist_rate = 0.1                   # deg/mm, at most
+    "force:end" = 50.0                 # N, at most: the force of a support on the hose (start, end, clips[k])
+    "moment:clips[0]" = 900.0          # N*mm, at most: its moment (not for a ball clip)
     deviation = 10.0                   # mm from the nominal shape, at most
 
     [design]                           # optional: which length and clocking to choose
@@ -76,6 +83,8 @@
     clocking_step = 15.0               # degrees
     samples = 0                        # tolerance samples judged per candidate (0: the nominal hose)
     rank_by = "clearance:strut"        # optional: the limited quantity whose margin ranks the candidates
+    rank_on = "nominal"                # or "p95_margin": by the 5th percentile of that margin over the
+                                       #   tolerances, first order at each candidate (needs [[vary]])
     method = "grid"                    # or "optimise": per length, the best clocking between grid points
 
     [reliability]                      # optional: rare failures (FORM, SORM, importance sampling)
@@ -103,8 +112,10 @@ from pydantic import AfterValidator, ConfigDict, Field, model_validator
 
 from hoseline.io.measured_values import read_measured_values
 from hoseline.io.problem_file import ProblemFileError, _Section, _validated, load_problem, read_toml
+from hoseline.io.sweep_file import ObstacleSection, _obstacle
 from hoseline.procedures.variation.correlation import Correlation
 from hoseline.procedures.variation.design_search import DesignGrid, default_rank_by
+from hoseline.procedures.variation.fixed_obstacles import FixedObstacles
 from hoseline.procedures.variation.precision import Precision
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit, quantities
 from hoseline.procedures.variation.rare import Reliability
@@ -197,6 +208,7 @@ class DesignSection(_Section):
     clocking_step: Positive = 15.0
     samples: Annotated[int, Field(ge=0)] = 0
     rank_by: str | None = None
+    rank_on: Literal["nominal", "p95_margin"] = "nominal"
     method: Literal["grid", "optimise"] = "grid"
 
 
@@ -228,6 +240,7 @@ class StudyFile(_Section):
     sampling: SamplingSection = Field(default_factory=SamplingSection)
     vary: list[VarySection] = Field(default_factory=list)
     correlation: list[CorrelationSection] = Field(default_factory=list)
+    obstacles: list[ObstacleSection] = Field(default_factory=list)
     limits: dict[str, float] = Field(default_factory=dict)
     design: DesignSection | None = None
     reliability: ReliabilitySection | None = None
@@ -251,6 +264,8 @@ def load_study(path: str | Path) -> tuple[Study, str, Path]:
     spec = _validated(StudyFile, data, str(path), error=StudyFileError)
     base_path = path.parent / spec.base
     base, text = _base(base_path, str(path), spec.base)
+    if spec.obstacles:
+        base = _with_obstacles(base, spec.obstacles, path)
     tolerances = tuple(_tolerance(item, k, base, path) for k, item in enumerate(spec.vary))
     variation = Variation(tolerances, clips=len(base.problem.clips))
     if spec.correlation:
@@ -293,6 +308,28 @@ def _base(path: Path, source: str, given: str) -> tuple[StudyBase, str]:
         return StudyBase(load_problem(path)), text
     except ProblemFileError as exc:
         raise StudyFileError(f"{source}: base = \"{given}\": {exc}") from None
+
+
+def _with_obstacles(base: StudyBase, sections: list[ObstacleSection], path: Path) -> StudyBase:
+    """The placement base with the fixed obstacles of [[obstacles]] (their meshes read, relative to the study file)."""
+    source = str(path)
+    if base.sweep is not None:
+        raise StudyFileError(f"{source}: [[obstacles]] with a sweep file as the base: a sweep's obstacles are its "
+                             "own; give them in the sweep file's [[obstacles]] and remove them here")
+    for k, section in enumerate(sections):
+        if section.body is not None:
+            raise StudyFileError(f"{source}: obstacles[{k}].body = \"{section.body}\": a placement study's obstacles "
+                                 "are fixed; remove body (or study a sweep file, whose obstacles move with bodies)")
+    try:
+        obstacles = tuple(_obstacle(section, path.parent, source) for section in sections)
+    except ProblemFileError as exc:
+        raise StudyFileError(str(exc)) from None
+    names = [o.name for o in obstacles]
+    for k, name in enumerate(names):
+        if name in names[:k]:
+            raise StudyFileError(f"{source}: obstacles[{k}].name = \"{name}\" is used by an earlier obstacle: give "
+                                 "each obstacle its own name")
+    return StudyBase(base.problem, obstacles=FixedObstacles(obstacles))
 
 
 def _scalar(value, name: str) -> float:
@@ -439,20 +476,21 @@ def _measured_file(path: Path, item: VarySection, where: str) -> tuple[float, ..
 
 def _limits(given: dict[str, float], base: StudyBase, source: str) -> tuple[Limit, ...]:
     """The limits: the file's, over the defaults (the hose's minimum bend radius, each obstacle's clearance)."""
-    known = {q.name: q for q in quantities(base.obstacle_names)}
+    known = {q.name: q for q in base.quantities}
     values: dict[str, float] = {}
     if base.problem.hose.min_bend_radius is not None:
         values["bend_radius"] = base.problem.hose.min_bend_radius
-    for obstacle in () if base.sweep is None else base.sweep.obstacles:
+    obstacles = base.sweep.obstacles if base.sweep is not None else () if base.obstacles is None else base.obstacles.obstacles
+    for obstacle in obstacles:
         values[f"{CLEARANCE}{obstacle.name}"] = obstacle.clearance
     for name, value in given.items():
         if not math.isfinite(value):
             raise StudyFileError(f"{source}: limits.{name} = {value!r}: must be a finite number")
         if name == "clearance":
-            if base.sweep is None or not base.sweep.obstacles:
-                raise StudyFileError(f"{source}: limits.clearance: the base has no obstacles; remove it or use a sweep "
-                                     "file with [[obstacles]] as the base")
-            values.update({f"{CLEARANCE}{o.name}": value for o in base.sweep.obstacles})
+            if not obstacles:
+                raise StudyFileError(f"{source}: limits.clearance: the base has no obstacles; remove it, give "
+                                     "[[obstacles]] (a placement) or use a sweep file with [[obstacles]] as the base")
+            values.update({f"{CLEARANCE}{o.name}": value for o in obstacles})
         elif name in known:
             values[name] = value
         else:
@@ -483,7 +521,20 @@ def _design(section: DesignSection, base: StudyBase, limits: tuple[Limit, ...], 
     if rank_by not in names:
         raise StudyFileError(f"{source}: design.rank_by = \"{rank_by}\": not a limited quantity; choose one of "
                              f"{', '.join(names)}")
-    return DesignGrid(lengths, clockings, rank_by, section.samples, section.method)
+    if section.rank_on == "p95_margin":
+        if sampling.count == 0:
+            raise StudyFileError(f"{source}: design.rank_on = \"p95_margin\" needs [[vary]] tolerances (the margins are "
+                                 "judged over their samples): give some, or rank_on = \"nominal\"")
+        if section.samples:
+            raise StudyFileError(f"{source}: design.samples = {section.samples} with rank_on = \"p95_margin\": both judge "
+                                 "the 5th percentile of margin (by solved samples, or to first order): give samples = 0 "
+                                 "or remove rank_on")
+        uncovered = _uncovered_sensitivities(base)
+        if uncovered:
+            raise StudyFileError(f"{source}: design.rank_on = \"p95_margin\": the base has {uncovered}, whose "
+                                 "sensitivities are not covered (docs/variation.md); judge the candidates by samples "
+                                 "(design.samples) instead")
+    return DesignGrid(lengths, clockings, rank_by, section.samples, section.method, section.rank_on)
 
 
 def _reliability(section: ReliabilitySection, base: StudyBase, variation: Variation, limits: tuple[Limit, ...],
@@ -492,10 +543,7 @@ def _reliability(section: ReliabilitySection, base: StudyBase, variation: Variat
     sensitivities are covered."""
     if not variation.tolerances:
         raise StudyFileError(f"{source}: [reliability] needs [[vary]] tolerances: give some, or remove [reliability]")
-    problem = base.problem
-    uncovered = ("stiffener springs" if problem.hose.stiffeners is not None else
-                 "a sliding clip" if any(clip.kind == "sliding" for clip in problem.clips) else
-                 "clips in a sweep" if base.sweep is not None and problem.clips else None)
+    uncovered = _uncovered_sensitivities(base)
     if uncovered:
         raise StudyFileError(f"{source}: [reliability]: the base has {uncovered}, whose sensitivities FORM needs are "
                              "not covered (docs/variation.md); remove [reliability] and judge the limits by sampling")
@@ -508,6 +556,15 @@ def _reliability(section: ReliabilitySection, base: StudyBase, variation: Variat
             raise StudyFileError(f"{source}: reliability.limits[{k}] = \"{name}\": not a limit FORM can judge; choose "
                                  f"one of {', '.join(smooth)} (given in [limits]; the deviation has no derivative)")
     return Reliability(section.method, section.importance_samples, tuple(section.limits), section.seed)
+
+
+def _uncovered_sensitivities(base: StudyBase) -> str | None:
+    """What in the base the sensitivities do not cover (stiffener springs, a sliding clip, clips in a sweep), or
+    None."""
+    problem = base.problem
+    return ("stiffener springs" if problem.hose.stiffeners is not None else
+            "a sliding clip" if any(clip.kind == "sliding" for clip in problem.clips) else
+            "clips in a sweep" if base.sweep is not None and problem.clips else None)
 
 
 def _steps(pair: list[float], step: float) -> tuple[float, ...]:

@@ -46,7 +46,8 @@ def fingerprint(study_text: str, base_text: str, study: Study) -> str:
     for tolerance in study.variation.tolerances:
         digest.update(np.array(tolerance.size, dtype=float).tobytes())
     sweep = study.base.sweep
-    for obstacle in () if sweep is None else sweep.obstacles:
+    fixed = () if study.base.obstacles is None else study.base.obstacles.obstacles
+    for obstacle in fixed if sweep is None else sweep.obstacles:
         digest.update(np.ascontiguousarray(obstacle.vertices, dtype=float).tobytes())
         digest.update(np.ascontiguousarray(obstacle.faces, dtype=np.int64).tobytes())
     for motion in () if sweep is None else sweep.motions:
@@ -167,6 +168,26 @@ def sensitivities_csv(outcome: StudyOutcome) -> str:
     return _table(columns)
 
 
+def station_sensitivities_csv(outcome: StudyOutcome) -> str:
+    """Per station of the nominal hose (of a sweep: at its first pose) and varied coordinate: the derivative of the
+    station's position (mm per unit of the coordinate), one row each; its arc length along the nominal hose (mm)."""
+    derivatives = outcome.first_order.station_derivatives
+    variation = outcome.study.variation
+    varied = list(variation.varied)
+    stations = derivatives.shape[0]
+    arc = np.linspace(0.0, outcome.study.base.problem.hose.length, stations)
+    moved = derivatives[:, :, varied]  # (stations, 3, varied)
+    columns: dict[str, list | np.ndarray] = {
+        "station": np.repeat(np.arange(stations), len(varied)),
+        "arc_length [mm]": np.repeat(arc, len(varied)),
+        "coordinate": [variation.names[k] for k in varied] * stations,
+        "unit": [variation.units[k] for k in varied] * stations,
+    }
+    for axis, name in enumerate("xyz"):
+        columns[f"d{name} [mm per unit]"] = moved[:, axis, :].ravel()
+    return _table(columns)
+
+
 def design_csv(outcome: StudyOutcome) -> str:
     """The ranked candidates that meet every limit, with the margin of each limit (with the optimiser: one per
     length, and whether its clocking comes from the optimiser or the grid)."""
@@ -281,7 +302,8 @@ def study_document(outcome: StudyOutcome) -> dict:
     if outcome.design is not None:
         design = outcome.design
         document["design"] = {"lengths_mm": list(design.grid.lengths), "clockings_deg": list(design.grid.clockings),
-                              "rank_by": design.grid.rank_by, "samples_per_candidate": design.grid.samples,
+                              "rank_by": design.grid.rank_by, "rank_on": design.grid.rank_on,
+                              "samples_per_candidate": design.grid.samples,
                               "method": design.grid.method, "ranking": design.table(),
                               "failure_reasons": design.reasons}
         if design.refined is not None:
@@ -327,6 +349,7 @@ def write_study_data(outcome: StudyOutcome, folder: Path, base_path: Path) -> No
     _write_corners(outcome, folder, base_path)
     if outcome.first_order is not None:
         write_text(folder / "sensitivities.csv", sensitivities_csv(outcome))
+        write_text(folder / "station_sensitivities.csv", station_sensitivities_csv(outcome))
     if outcome.design is not None:
         write_text(folder / "design.csv", design_csv(outcome))
         write_text(folder / "design_grid.csv", design_grid_csv(outcome))

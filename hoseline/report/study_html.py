@@ -176,6 +176,8 @@ def _design_table(outcome: StudyOutcome) -> str:
     grid = design.grid
     intro = (f"<p>{len(grid.lengths)} lengths x {len(grid.clockings)} clockings"
              + (f", each over {grid.samples} tolerance samples (margins: 5th percentile)" if grid.samples else "")
+             + (", each over the study's tolerance samples to first order at the candidate (margins: 5th percentile "
+                "of the linearised margin)" if grid.first_order else "")
              + f"; ranked by the margin of {html.escape(grid.rank_by)}. {len(design.ranking)} grid candidates meet "
              "every limit.</p>")
     if design.refined is not None:

@@ -7,6 +7,7 @@
     envelope.csv         per station: P5/P50/P95 and extreme positions, distance from the nominal shape
     clearance_by_pose.csv  per pose of a sweep: clearance distribution per obstacle
     sensitivities.csv    derivatives of the quantities (placements and sweeps)
+    station_sensitivities.csv  derivatives of the nominal hose's stations, per station and varied coordinate
     design.csv, design_grid.csv   the ranked candidates, and every candidate
     worst/QUANTITY/problem.toml   (and sweep.toml) the worst sample of each limit
 """

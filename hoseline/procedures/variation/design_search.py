@@ -7,6 +7,16 @@ not a design against its requirements); with `samples` > 0 each is also judged o
 the study's tolerances (the same deviations for every candidate), a limit then counting as met
 when its 5th percentile of margin (the margin 95 % of the hoses keep) is not negative.
 
+With rank_on = "p95_margin" each candidate is judged over the tolerances to first order instead: its
+sensitivities are computed at the candidate (one nominal solve and one banded solve per varied
+coordinate, sensitivity.py), every quantity is linearised there, Q(c) = Q0 + dQ/dc . c, and evaluated
+at every tolerance sample of the study (the same deviations for every candidate, no solve), and a
+limit's judged margin is the 5th percentile of its linearised margin over them (the margin 95 % of the
+hoses keep): exact for the linearisation whatever the distributions (uniform, lognormal, ...), and
+as cheap as a nominal candidate plus its sensitivities.  A candidate whose margin is large but
+sensitive to the tolerances then ranks below one with a smaller, steadier margin.  Where the first
+order is poor (a fold, a kink over a sweep's poses) judge with sampled candidates (`samples`) instead.
+
 The ranking: the candidates that meet every limit, best first by the margin of `rank_by`
 (default: the smallest clearance, else the bend radius), ties broken by the smaller |clocking|
 and then the shorter hose.  The grid of the margin of `rank_by` over length x clocking is the
@@ -43,11 +53,13 @@ import numpy as np
 from scipy.optimize import Bounds, NonlinearConstraint, minimize
 
 from hoseline.procedures.variation.quantities import CLEARANCE, Limit
-from hoseline.procedures.variation.samples import StudyContext, evaluate_batch, failure_cause
-from hoseline.procedures.variation.tolerances import INDEX
+from hoseline.procedures.variation.samples import SOLVER_FAILURES, StudyContext, evaluate_batch, failure_cause
+from hoseline.procedures.variation.sweep_sensitivity import study_sensitivities
+from hoseline.procedures.variation.tolerances import INDEX, perturbed
 
 DESIGN_PERCENTILE = 5.0  # with tolerances, a limit is met when this percentile of its margin is not negative
 METHODS = ("grid", "optimise")
+RANK_ON = ("nominal", "p95_margin")  # judged at the nominal hose (or over sampled tolerances), or to first order
 CLOCKING_TOLERANCE = 0.01  # degrees: the optimiser's final trust-region radius on the clocking
 MAX_EVALUATIONS = 40  # candidates solved by the optimiser per length at most
 
@@ -55,19 +67,39 @@ MAX_EVALUATIONS = 40  # candidates solved by the optimiser per length at most
 @dataclass(frozen=True)
 class DesignGrid:
     """The candidates: lengths (mm) x clockings (twist at assembly, degrees), absolute values; rank_by: the
-    quantity whose margin ranks them (a limited one); samples: tolerance samples per candidate (0: nominal only)."""
+    quantity whose margin ranks them (a limited one); samples: tolerance samples solved per candidate (0: nominal
+    only); rank_on: "nominal" (as samples says) or "p95_margin" (each limit's 5th percentile of margin over the
+    study's tolerance samples to first order at the candidate; samples must then be 0)."""
 
     lengths: tuple[float, ...]
     clockings: tuple[float, ...]
     rank_by: str
     samples: int = 0
     method: str = "grid"
+    rank_on: str = "nominal"
 
     def __post_init__(self) -> None:
         if not self.lengths or not self.clockings:
             raise ValueError("a design search needs at least one length and one clocking")
         if self.method not in METHODS:
             raise ValueError(f"design method {self.method!r}: choose one of {', '.join(METHODS)}")
+        if self.rank_on not in RANK_ON:
+            raise ValueError(f"design rank_on {self.rank_on!r}: choose one of {', '.join(RANK_ON)}")
+        if self.rank_on == "p95_margin" and self.samples:
+            raise ValueError(f"design samples = {self.samples} with rank_on = \"p95_margin\": both judge the 5th "
+                             "percentile of margin, by solved samples or to first order; give samples = 0 or "
+                             "rank_on = \"nominal\"")
+
+    @property
+    def first_order(self) -> bool:
+        """Whether the candidates are judged to first order over the tolerances (rank_on "p95_margin")."""
+        return self.rank_on == "p95_margin"
+
+    def offsets(self, nominal_length: float, nominal_twist: float, width: int) -> list[np.ndarray]:
+        """(width,) per candidate (lengths outermost, then clockings): its length (mm) and clocking (deg) from the
+        base's, as a deviation (width: tolerances.Variation.width)."""
+        return [candidate_rows(length - nominal_length, clocking - nominal_twist, np.zeros((1, width)))[0]
+                for length in self.lengths for clocking in self.clockings]
 
     def coordinates(self, nominal_length: float, nominal_twist: float, deviations: np.ndarray) -> np.ndarray:
         """(L * C * S, width) the deviations of every candidate (lengths outermost, then clockings) and sample.
@@ -86,6 +118,47 @@ def candidate_rows(length_offset: float, clocking_offset: float, deviations: np.
     offset[INDEX["hose.length"]] = length_offset
     offset[INDEX["end.twist"]] = clocking_offset
     return deviations + offset
+
+
+@dataclass(frozen=True)
+class FirstOrderCandidate:
+    """One candidate judged to first order: offset (width,) its length and clocking from the base's as a deviation;
+    deviations (S, width) the study's tolerance samples; varied: the coordinates the tolerances move."""
+
+    offset: np.ndarray
+    deviations: np.ndarray
+    varied: tuple[int, ...]
+
+
+def first_order_candidate(context: StudyContext, candidate: FirstOrderCandidate) -> dict[str, np.ndarray]:
+    """The quantities of a candidate linearised at it and evaluated at every tolerance sample (a Dask task): arrays
+    as evaluate_batch's for judge (values (S, quantities), the deviation NaN: it has no derivative; failed (S,),
+    reason (S,)); every sample failed with the reason when the candidate cannot be solved or differentiated."""
+    count = len(candidate.deviations)
+    names = [q.name for q in context.base.quantities]
+    out = {"values": np.full((count, len(names)), np.nan), "failed": np.zeros(count, dtype=bool),
+           "reason": np.full(count, "", dtype=object)}
+    try:
+        found = study_sensitivities(context.base, perturbed(context.base.problem, candidate.offset), candidate.varied)
+    except SOLVER_FAILURES as exc:
+        out["failed"][:] = True
+        out["reason"][:] = f"{type(exc).__name__}: {exc}"
+    else:
+        columns = [names.index(name) for name in found.names]
+        out["values"][:, columns] = found.values + candidate.deviations @ found.derivatives.T
+    out["reason"] = out["reason"].astype(str)
+    return out
+
+
+def candidate_arrays(context: StudyContext, offset: np.ndarray, deviations: np.ndarray, first_order: bool,
+                     varied: tuple[int, ...]) -> dict[str, np.ndarray]:
+    """The arrays judge and candidate_margins read for one candidate (offset (width,) its length and clocking as a
+    deviation): its hoses solved at each of `deviations` (S, width), or its first-order linearisation evaluated
+    there (first_order; varied: the coordinates the tolerances move)."""
+    if first_order:
+        return first_order_candidate(context, FirstOrderCandidate(offset, deviations, varied))
+    rows = deviations + offset
+    return evaluate_batch(context, np.arange(len(rows)), rows)
 
 
 def candidate_margins(limits: tuple[Limit, ...], names: list[str], values: np.ndarray, failed: np.ndarray) -> np.ndarray:
@@ -172,8 +245,9 @@ def default_rank_by(limits: tuple[Limit, ...]) -> str:
 
 
 def judge(grid: DesignGrid, limits: tuple[Limit, ...], names: list[str], samples: dict[str, np.ndarray]) -> DesignOutcome:
-    """Judge the candidates from their samples (rows as grid.coordinates orders them)."""
-    per = max(grid.samples, 1)
+    """Judge the candidates from their samples (rows as grid.coordinates orders them: candidate after candidate,
+    the same number of rows each; to first order, first_order_candidate's rows)."""
+    per = len(samples["failed"]) // (len(grid.lengths) * len(grid.clockings))
     shape = (len(grid.lengths), len(grid.clockings), per)
     failed = samples["failed"].reshape(shape)
     margins = candidate_margins(limits, names, samples["values"].reshape(shape + (-1,)), failed)
@@ -188,7 +262,8 @@ def judge(grid: DesignGrid, limits: tuple[Limit, ...], names: list[str], samples
 class RefineTask:
     """What the optimiser needs for one length: length (mm), the bracket of clockings (deg) and the grid's best
     clocking in it with its margins, the base's length (mm) and twist (deg), the tolerance deviations (S, width)
-    judged per candidate, the limits, the quantities' names and the position of rank_by in the limits."""
+    judged per candidate, the limits, the quantities' names and the position of rank_by in the limits; first_order:
+    candidates judged to first order over the deviations (varied: the coordinates the tolerances move)."""
 
     length: float
     bracket: tuple[float, float]
@@ -200,10 +275,12 @@ class RefineTask:
     limits: tuple[Limit, ...]
     names: tuple[str, ...]
     rank: int
+    first_order: bool = False
+    varied: tuple[int, ...] = ()
 
 
 def refine_tasks(outcome: DesignOutcome, names: list[str], nominal_length: float, nominal_twist: float,
-                 deviations: np.ndarray) -> list[RefineTask]:
+                 deviations: np.ndarray, varied: tuple[int, ...] = ()) -> list[RefineTask]:
     """One task per length with a grid cell meeting every limit: its best cell's bracket."""
     grid = outcome.grid
     clockings = grid.clockings
@@ -215,7 +292,7 @@ def refine_tasks(outcome: DesignOutcome, names: list[str], nominal_length: float
         j = cells[0]
         bracket = (clockings[max(j - 1, 0)], clockings[min(j + 1, len(clockings) - 1)])
         tasks.append(RefineTask(length, bracket, clockings[j], outcome.margins[i, j], nominal_length, nominal_twist,
-                                deviations, outcome.limits, tuple(names), outcome.rank_index))
+                                deviations, outcome.limits, tuple(names), outcome.rank_index, grid.first_order, varied))
     return tasks
 
 
@@ -230,8 +307,9 @@ def refine_length(context: StudyContext, task: RefineTask) -> dict[str, np.ndarr
 
     def margins(clocking: float) -> np.ndarray:
         if clocking not in seen:
-            rows = candidate_rows(task.length - task.nominal_length, clocking - task.nominal_twist, task.deviations)
-            out = evaluate_batch(context, np.arange(len(rows)), rows)
+            offset = candidate_rows(task.length - task.nominal_length, clocking - task.nominal_twist,
+                                    np.zeros((1, task.deviations.shape[1])))[0]
+            out = candidate_arrays(context, offset, task.deviations, task.first_order, task.varied)
             seen[clocking] = candidate_margins(task.limits, list(task.names), out["values"], out["failed"])
         return seen[clocking]
 

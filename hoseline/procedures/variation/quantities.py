@@ -9,8 +9,14 @@ over the poses:
     bend_radius     mm     smallest inside bend radius                                (limit: at least)
     end_torque      N*mm   largest torque on the end fitting about its axis           (limit: at most)
     twist_rate      deg/mm largest rate of twist, twisting moment / GJ                (limit: at most)
+    force:SUPPORT   N      largest magnitude of the force of SUPPORT on the hose      (limit: at most)
+    moment:SUPPORT  N*mm   largest magnitude of the moment of SUPPORT on the hose,    (limit: at most)
+                           about its point (supports holding a direction only)
     deviation       mm     largest distance of a station from the nominal hose's      (limit: at most)
                            station of the same index (same fraction of the length), at the same pose
+
+A SUPPORT is "start" or "end" (the mounts) or "clips[k]" (clip k of the problem, from 0); a ball clip holds
+no direction and has no moment (reaction_supports).
 """
 
 from __future__ import annotations
@@ -23,13 +29,15 @@ import numpy as np
 LOWER = "at least"
 UPPER = "at most"
 
-FIXED = {
+HEALTH = {
     "bend_radius": ("mm", LOWER, "smallest inside bend radius"),
     "end_torque": ("N*mm", UPPER, "largest torque on the end fitting about its axis"),
     "twist_rate": ("deg/mm", UPPER, "largest rate of twist (twisting moment / GJ)"),
-    "deviation": ("mm", UPPER, "largest distance from the nominal shape"),
 }
+DEVIATION = ("mm", UPPER, "largest distance from the nominal shape")
 CLEARANCE = "clearance:"
+FORCE = "force:"
+MOMENT = "moment:"
 
 
 @dataclass(frozen=True)
@@ -42,16 +50,33 @@ class Quantity:
     description: str
 
 
-def quantities(obstacle_names: tuple[str, ...]) -> tuple[Quantity, ...]:
-    """The quantities of a study with these obstacles, in the order samples store them."""
+def quantities(obstacle_names: tuple[str, ...], force_supports: tuple[str, ...] = (),
+               moment_supports: tuple[str, ...] = ()) -> tuple[Quantity, ...]:
+    """The quantities of a study with these obstacles and supports (reaction_supports), in the order samples store
+    them: clearances, bend radius, end torque, twist rate, forces, moments, deviation."""
     clearances = tuple(Quantity(f"{CLEARANCE}{name}", "mm", LOWER, f"smallest clearance to {name}") for name in obstacle_names)
-    return clearances + tuple(Quantity(name, *spec) for name, spec in FIXED.items())
+    health = tuple(Quantity(name, *spec) for name, spec in HEALTH.items())
+    forces = tuple(Quantity(f"{FORCE}{name}", "N", UPPER, f"largest force of the {name} support on the hose")
+                   for name in force_supports)
+    moments = tuple(Quantity(f"{MOMENT}{name}", "N*mm", UPPER, f"largest moment of the {name} support on the hose")
+                    for name in moment_supports)
+    return clearances + health + forces + moments + (Quantity("deviation", *DEVIATION),)
+
+
+def reaction_supports(clips_hold_direction: tuple[bool, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(supports with a force, supports with a moment) of a hose with clips that hold a direction or not (a ball
+    clip): the mounts and every clip; the mounts and the clips holding a direction."""
+    clips = tuple(f"clips[{k}]" for k in range(len(clips_hold_direction)))
+    framed = tuple(name for name, held in zip(clips, clips_hold_direction) if held)
+    return ("start", "end") + clips, ("start", "end") + framed
 
 
 def natural_scale(quantity: Quantity, length: float, stiffness: float) -> float:
     """A magnitude the quantity is naturally measured against: the hose length (mm), stiffness / length
-    (N*mm), one radian over the length (deg/mm).  length: mm.  stiffness: the larger of EI and GJ, N*mm^2."""
-    return {"mm": length, "N*mm": stiffness / length, "deg/mm": math.degrees(1.0) / length}[quantity.unit]
+    (N*mm), stiffness / length^2 (N), one radian over the length (deg/mm).  length: mm.  stiffness: the larger of
+    EI and GJ, N*mm^2."""
+    return {"mm": length, "N*mm": stiffness / length, "N": stiffness / length**2,
+            "deg/mm": math.degrees(1.0) / length}[quantity.unit]
 
 
 @dataclass(frozen=True)
@@ -78,6 +103,8 @@ class PoseReadings:
     centerlines: (M, N+1, 3) mm.  bend_radius, twisting_moment: (M, N+1) mm and N*mm.
     end_moment: (M, 3) N*mm, the end mount's moment on the hose.  end_direction: (M, 3) unit.
     clearance: (O, M) mm, one row per obstacle.  torsional_stiffness: GJ, N*mm^2.
+    forces: (M, R) N, the magnitude of each support's force on the hose (reaction_supports' first list);
+    moments: (M, R') N*mm, of each support's moment (its second list).
     """
 
     centerlines: np.ndarray
@@ -87,6 +114,8 @@ class PoseReadings:
     end_direction: np.ndarray
     clearance: np.ndarray
     torsional_stiffness: float
+    forces: np.ndarray
+    moments: np.ndarray
 
     def per_pose(self) -> dict[str, np.ndarray]:
         """(M,) per pose: bend_radius (smallest), end_torque, twisting_moment (largest |.|)."""
@@ -104,9 +133,11 @@ class PoseReadings:
         """The quantities of quantities() but the deviation (which has no derivative at the nominal hose)."""
         pose = self.per_pose()
         twist = math.degrees(float(np.max(pose["twisting_moment"]))) / self.torsional_stiffness
-        fixed = [float(np.min(pose["bend_radius"])), float(np.max(pose["end_torque"])), twist]
-        return np.concatenate([np.min(self.clearance, axis=1), fixed])
+        health = [float(np.min(pose["bend_radius"])), float(np.max(pose["end_torque"])), twist]
+        return np.concatenate([np.min(self.clearance, axis=1), health, np.max(self.forces, axis=0),
+                               np.max(self.moments, axis=0)])
 
     def values(self, nominal: np.ndarray) -> np.ndarray:
-        """The quantities in the order of quantities(): clearances, bend_radius, end_torque, twist_rate, deviation."""
+        """The quantities in the order of quantities(): clearances, bend_radius, end_torque, twist_rate, forces,
+        moments, deviation."""
         return np.append(self.smooth_values(), np.max(self.station_deviation(nominal)))

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import ndtr
@@ -104,8 +104,7 @@ def hose_margin(base: StudyBase, variation: Variation, limit: Limit) -> Callable
     nearly linear where the quantity grows in proportion to a factor (the torque to the stiffness, lognormal), where
     the difference grows exponentially along z and the search would wander.  A clearance's is the difference (mm).
     """
-    from hoseline.procedures.variation.sensitivity import placement_sensitivities
-    from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities
+    from hoseline.procedures.variation.sweep_sensitivity import study_sensitivities
 
     sign = 1.0 if limit.margin(1.0) > limit.margin(0.0) else -1.0  # d(margin)/d(quantity)
     relative = limit.quantity.name in RELATIVE and limit.value > 0.0
@@ -113,10 +112,7 @@ def hose_margin(base: StudyBase, variation: Variation, limit: Limit) -> Callable
     def margin(deviation: np.ndarray) -> tuple[float, np.ndarray]:
         problem = perturbed(base.problem, deviation)
         try:
-            if base.sweep is None:
-                found = placement_sensitivities(problem, variation.varied)
-            else:
-                found = sweep_sensitivities(replace(base.sweep, problem=problem), variation.varied)
+            found = study_sensitivities(base, problem, variation.varied)
         except SOLVER_FAILURES:  # the hose cannot be solved here: the search steps back
             return math.nan, np.full(deviation.size, math.nan)
         k = found.names.index(limit.quantity.name)

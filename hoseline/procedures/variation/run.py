@@ -17,7 +17,8 @@ import numpy as np
 
 from hoseline.procedures.placement.continuation import PlacementError, Progress
 from hoseline.procedures.variation.designs import balanced
-from hoseline.procedures.variation.design_search import RefineTask, judge, ranked_refinements, refine_length, refine_tasks
+from hoseline.procedures.variation.design_search import (FirstOrderCandidate, RefineTask, first_order_candidate, judge,
+                                                        ranked_refinements, refine_length, refine_tasks)
 from hoseline.procedures.variation.engine import Engine, Where, default_batch_size
 from hoseline.procedures.variation.global_sensitivity import sobol_indices
 from hoseline.procedures.variation.precision import PrecisionOutcome, next_total
@@ -25,9 +26,8 @@ from hoseline.procedures.variation.rare import RareEvent, RareTask, RareUnion, r
 from hoseline.procedures.variation.reliability import importance_estimate, importance_points, union_first_order
 from hoseline.procedures.variation.scheduler import scheduler_address
 from hoseline.procedures.variation.samples import StudyContext, nominal_context
-from hoseline.procedures.variation.sensitivity import placement_sensitivities
 from hoseline.procedures.variation.study import Study, StudyOutcome, merge_batches, summarize
-from hoseline.procedures.variation.sweep_sensitivity import sweep_sensitivities
+from hoseline.procedures.variation.sweep_sensitivity import study_sensitivities
 from hoseline.procedures.variation.worst_case import WorstCase, worst_cases
 
 
@@ -74,10 +74,7 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         sensitivities = None
         if study.sensitivities and study.variation.tolerances:
             try:
-                if study.base.sweep is not None:
-                    sensitivities = sweep_sensitivities(study.base.sweep, study.variation.varied)
-                else:
-                    sensitivities = placement_sensitivities(study.base.problem, study.variation.varied)
+                sensitivities = study_sensitivities(study.base, study.base.problem, study.variation.varied)
             except (PlacementError, ValueError) as exc:
                 notes.append(f"no sensitivities: {exc}")
             else:
@@ -98,11 +95,20 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
         design_samples = None
         if study.design is not None:
             grid = study.design
-            deviations = coordinates[:grid.samples] if grid.samples else np.zeros((1, study.variation.width))
-            rows = grid.coordinates(study.base.problem.hose.length, study.base.problem.end_twist_deg, deviations)
+            problem = study.base.problem
             tick = time.perf_counter()
             cold = replace(context, warm=None)  # the candidates are too far apart for Newton from the nominal hose
-            design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
+            if grid.first_order:
+                deviations = coordinates
+                candidates = [FirstOrderCandidate(offset, deviations, study.variation.varied) for offset in
+                              grid.offsets(problem.hose.length, problem.end_twist_deg, study.variation.width)]
+                found = _stored_map(engine, first_order_candidate, cold, candidates, stores("design"), "design",
+                                    progress)
+                design_samples = merge_batches(found)
+            else:
+                deviations = coordinates[:grid.samples] if grid.samples else np.zeros((1, study.variation.width))
+                rows = grid.coordinates(problem.hose.length, problem.end_twist_deg, deviations)
+                design_samples = _stage(engine, "design", cold, rows, default_batch_size(len(rows)), stores, progress)
             timings["design"] = time.perf_counter() - tick
         corners = None
         if study.worst_case and sensitivities is not None:
@@ -129,8 +135,8 @@ def run_study(study: Study, stores: Callable[[str], BatchStore] | None = None, *
             design = judge(study.design, design_limits, names, design_samples)
             if grid.method == "optimise":
                 tick = time.perf_counter()
-                tasks = refine_tasks(design, names, study.base.problem.hose.length, study.base.problem.end_twist_deg,
-                                     deviations)
+                tasks = refine_tasks(design, names, problem.hose.length, problem.end_twist_deg, deviations,
+                                     study.variation.varied)
                 design.refined = ranked_refinements(tasks, _refine(engine, cold, tasks, stores, progress))
                 timings["optimiser"] = time.perf_counter() - tick
         tick = time.perf_counter()

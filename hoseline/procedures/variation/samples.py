@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from hoseline.mechanics.clipped_newton import clip_reactions
 from hoseline.mechanics.newton import RodProperties, node_positions
 from hoseline.mechanics.rod import Clamps, RodState
 from hoseline.model.problem import Problem
@@ -31,8 +32,9 @@ from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.hose_health import hose_health
 from hoseline.procedures.placement.sequence import place_only
 from hoseline.procedures.sweep.quasi_static import run_sweep
+from hoseline.procedures.variation.fixed_obstacles import FixedObstacles
 from hoseline.procedures.variation.nominal import NominalPlacement, nominal_placement, warm_start
-from hoseline.procedures.variation.quantities import PoseReadings, quantities
+from hoseline.procedures.variation.quantities import PoseReadings, Quantity, quantities, reaction_supports
 from hoseline.procedures.variation.tolerances import perturbed
 
 SHAPE_POSES = 12  # poses of a sweep whose centrelines each sample keeps, for the envelope
@@ -53,15 +55,28 @@ def failure_cause(reason: str) -> str:
 
 @dataclass(frozen=True)
 class StudyBase:
-    """What is varied: a placement (sweep None) or a sweep of `problem`'s hose."""
+    """What is varied: a placement (sweep None) or a sweep of `problem`'s hose; obstacles: fixed obstacles a
+    placement's clearance is measured to (a sweep's are its own)."""
 
     problem: Problem
     sweep: SweepProblem | None = None
+    obstacles: FixedObstacles | None = None
+
+    def __post_init__(self) -> None:
+        if self.sweep is not None and self.obstacles is not None:
+            raise ValueError("a sweep study measures the clearance to the sweep's own obstacles: give them there")
 
     @property
     def obstacle_names(self) -> tuple[str, ...]:
-        """Names of the obstacles (none for a placement)."""
-        return () if self.sweep is None else tuple(o.name for o in self.sweep.obstacles)
+        """Names of the obstacles: the sweep's, or a placement's fixed ones."""
+        if self.sweep is not None:
+            return tuple(o.name for o in self.sweep.obstacles)
+        return () if self.obstacles is None else self.obstacles.names
+
+    @property
+    def quantities(self) -> tuple[Quantity, ...]:
+        """The judged quantities, in the order the samples store them (quantities.quantities)."""
+        return quantities(self.obstacle_names, *reaction_supports(tuple(c.holds_direction for c in self.problem.clips)))
 
     @property
     def pose_count(self) -> int:
@@ -75,8 +90,9 @@ class StudyBase:
         """
         if self.sweep is None:
             props, clamps, state, _ = place_only(problem)
-            return placement_readings(problem, props, clamps, state), 0
+            return placement_readings(problem, props, clamps, state, self.obstacles), 0
         result = run_sweep(replace(self.sweep, problem=problem, compare_free_roll=False), judge_assembly=False)
+        framed = [k for k, clip in enumerate(problem.clips) if clip.holds_direction]
         readings = PoseReadings(
             centerlines=result.centerlines,
             bend_radius=result.bend_radius,
@@ -85,6 +101,10 @@ class StudyBase:
             end_direction=result.end_directions,
             clearance=np.array([c.distance for c in result.clearances]).reshape(-1, result.pose_count),
             torsional_stiffness=problem.hose.torsional_stiffness,
+            forces=np.linalg.norm(np.concatenate([result.start_force[:, None], result.end_force[:, None],
+                                                  result.clip_forces], axis=1), axis=2),
+            moments=np.linalg.norm(np.concatenate([result.start_moment[:, None], result.end_moment[:, None],
+                                                   result.clip_moments[:, framed]], axis=1), axis=2),
         )
         return readings, len(result.snaps)
 
@@ -94,17 +114,27 @@ class StudyBase:
         return np.unique(np.linspace(0, count - 1, min(count, SHAPE_POSES)).round().astype(int))
 
 
-def placement_readings(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState) -> PoseReadings:
-    """The readings of one equilibrium `state` of `problem`'s hose under `clamps` (one pose, no obstacles)."""
+def placement_readings(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState,
+                       obstacles: FixedObstacles | None = None) -> PoseReadings:
+    """The readings of one equilibrium `state` of `problem`'s hose under `clamps` (one pose), with the clearance to
+    `obstacles` (none when None)."""
     health = hose_health(props, clamps, state, problem.hose.outer_radius)
+    nodes = node_positions(props, clamps, state)
+    forces, moments = [health.start_force, health.end_force], [health.start_moment, health.end_moment]
+    if clamps.clips:
+        clip_forces, clip_moments = clip_reactions(props, clamps, state)
+        forces.extend(clip_forces)
+        moments.extend(m for m, clip in zip(clip_moments, problem.clips) if clip.holds_direction)
     return PoseReadings(
-        centerlines=node_positions(props, clamps, state)[None],
+        centerlines=nodes[None],
         bend_radius=health.bend_radius[None],
         twisting_moment=health.twisting_moment[None],
         end_moment=health.end_moment[None],
         end_direction=-clamps.end_frame[2][None],
-        clearance=np.zeros((0, 1)),
+        clearance=np.zeros((0, 1)) if obstacles is None else obstacles.clearance(problem, nodes),
         torsional_stiffness=problem.hose.torsional_stiffness,
+        forces=np.linalg.norm(forces, axis=1)[None],
+        moments=np.linalg.norm(moments, axis=1)[None],
     )
 
 
@@ -125,7 +155,7 @@ def nominal_context(base: StudyBase, warm: bool = False) -> tuple[StudyContext, 
     """
     if warm and base.sweep is None:
         placed = nominal_placement(base.problem)
-        readings = placement_readings(base.problem, placed.props, placed.final, placed.state)
+        readings = placement_readings(base.problem, placed.props, placed.final, placed.state, base.obstacles)
         return StudyContext(base, readings.centerlines, placed), readings
     readings, _ = base.read(base.problem)
     return StudyContext(base, readings.centerlines), readings
@@ -139,7 +169,7 @@ def _read(context: StudyContext, index: int, deviation: np.ndarray) -> tuple[Pos
     if started is None:
         readings, snaps = base.read(problem)
         return readings, snaps, False, np.nan
-    readings = placement_readings(*started)
+    readings = placement_readings(*started, base.obstacles)
     if index >= CHECKED_WARM_STARTS:
         return readings, 0, True, np.nan
     published, _ = base.read(problem)
@@ -169,7 +199,7 @@ def evaluate_batch(context: StudyContext, indices: np.ndarray, coordinates: np.n
         "snaps": np.zeros(count, dtype=np.int64),
         "warm": np.zeros(count, dtype=bool),
         "branch_distance": np.full(count, np.nan),
-        "values": np.full((count, len(quantities(base.obstacle_names))), np.nan),
+        "values": np.full((count, len(base.quantities)), np.nan),
         "station_deviation": np.full((count, stations), np.nan),
         "shapes": np.full((count, len(keep), stations, 3), np.nan),
         "clearance": np.full((count, len(base.obstacle_names), poses), np.nan),

@@ -39,9 +39,9 @@ from hoseline.mechanics.clipped import unknown_layout
 from hoseline.mechanics.newton import apply_step, evaluate
 from hoseline.mechanics.rod import Clamps
 from hoseline.model.problem import Problem
+from hoseline.procedures.variation.fixed_obstacles import FixedObstacles
 from hoseline.procedures.variation.nominal import PerturbedPlacement, nominal_placement, rolled
-from hoseline.procedures.variation.quantities import quantities
-from hoseline.procedures.variation.samples import placement_readings
+from hoseline.procedures.variation.samples import StudyBase, placement_readings
 from hoseline.procedures.variation.tolerances import COORDINATES, Variation, coordinate_units
 
 RELATIVE_STEP = 1e-7  # central-difference step, of the parameter's scale (mm: the hose length; deg: 100 deg; ln: 10)
@@ -101,8 +101,10 @@ def _tangent(system, dgrad: np.ndarray, dconstraint: np.ndarray) -> tuple[np.nda
     return step, mu
 
 
-def placement_sensitivities(problem: Problem, varied: tuple[int, ...]) -> Sensitivities:
-    """Derivatives of the placement quantities and stations of `problem` with respect to the coordinates `varied`.
+def placement_sensitivities(problem: Problem, varied: tuple[int, ...],
+                            obstacles: FixedObstacles | None = None) -> Sensitivities:
+    """Derivatives of the placement quantities and stations of `problem` with respect to the coordinates `varied`;
+    obstacles: fixed obstacles whose clearances are quantities too.
 
     Raises PlacementError when the nominal hose cannot be placed, ValueError for stiffener springs
     (not covered: they are phased in after the lock) (nominal.nominal_placement).
@@ -112,7 +114,7 @@ def placement_sensitivities(problem: Problem, varied: tuple[int, ...]) -> Sensit
     free_clamps = PerturbedPlacement(problem, np.zeros(len(COORDINATES))).free()
     free_system = evaluate(props, free_clamps, free_state)
     final_system = evaluate(props, final, state)
-    readings = placement_readings(problem, props, final, state)
+    readings = placement_readings(problem, props, final, state, obstacles)
     values = readings.smooth_values()
     steps = step_sizes(problem)
     derivatives = np.zeros((values.size, steps.size))
@@ -124,13 +126,13 @@ def placement_sensitivities(problem: Problem, varied: tuple[int, ...]) -> Sensit
                            (moved[0].constraint - moved[1].constraint) / (2 * steps[j]))
         read = [
             placement_readings(side.problem, side.props, clamps, apply_step(side.props, clamps, state, sign * steps[j] * dx,
-                                                                            sign * steps[j] * dmu))
+                                                                            sign * steps[j] * dmu), obstacles)
             for side, clamps, sign in zip(sides, finals, (1.0, -1.0))
         ]
         derivatives[:, j] = (read[0].smooth_values() - read[1].smooth_values()) / (2 * steps[j])
         station_derivatives[:, :, j] = (read[0].centerlines[0] - read[1].centerlines[0]) / (2 * steps[j])
     return Sensitivities(
-        names=tuple(q.name for q in quantities(()) if q.name != "deviation"),
+        names=tuple(q.name for q in StudyBase(problem, obstacles=obstacles).quantities if q.name != "deviation"),
         values=values,
         derivatives=derivatives,
         stations=readings.centerlines[0],

@@ -17,7 +17,7 @@ from hoseline.model.problem import Problem
 from hoseline.procedures.variation.designs import balanced, round_design
 from hoseline.procedures.variation.design_search import DesignGrid, DesignOutcome
 from hoseline.procedures.variation.engine import default_batch_size
-from hoseline.procedures.variation.quantities import Limit, Quantity, natural_scale, quantities
+from hoseline.procedures.variation.quantities import Limit, Quantity, natural_scale
 from hoseline.procedures.variation.global_sensitivity import SobolIndices, saltelli_design
 from hoseline.procedures.variation.precision import Precision, PrecisionOutcome
 from hoseline.procedures.variation.rare import RareEvent, RareUnion, Reliability
@@ -95,7 +95,7 @@ class Study:
     @property
     def quantities(self) -> tuple[Quantity, ...]:
         """The judged quantities, in the order the samples store them."""
-        return quantities(self.base.obstacle_names)
+        return self.base.quantities
 
     def reliability_limits(self) -> tuple[Limit, ...]:
         """The limits whose rare failure [reliability] asks for (none without it): those it names, else every limit
@@ -140,6 +140,7 @@ class FirstOrder:
     station_spread_samples: np.ndarray
     contributions: np.ndarray  # (quantities, tolerances) standard deviations each tolerance alone gives
     derivatives: np.ndarray  # (quantities, 15) per unit of each coordinate (Sensitivities.derivatives)
+    station_derivatives: np.ndarray  # (N+1, 3, 15) mm per unit of each coordinate (Sensitivities.station_derivatives)
 
 
 @dataclass(frozen=True)
@@ -309,4 +310,4 @@ def _first_order(study: Study, sensitivities: Sensitivities, samples: dict[str, 
                       hose.length)
     return FirstOrder(sensitivities.names, mean, variance, checks, shape, linear,
                       np.sqrt(np.sum(np.var(shapes, axis=0, ddof=1), axis=1)), sensitivities.contributions(study.variation),
-                      sensitivities.derivatives)
+                      sensitivities.derivatives, sensitivities.station_derivatives)

@@ -39,9 +39,10 @@ from hoseline.model.sweep import SweepProblem
 from hoseline.procedures.geometry.clearance import TriangleIndex
 from hoseline.procedures.sweep.quasi_static import _fitting_lines, _nearest, run_sweep
 from hoseline.procedures.variation.nominal import EQUILIBRIUM, PerturbedPlacement, nominal_placement
-from hoseline.procedures.variation.quantities import PoseReadings, Quantity, natural_scale, quantities
-from hoseline.procedures.variation.samples import placement_readings
-from hoseline.procedures.variation.sensitivity import Sensitivities, _tangent, perturbed_finals, step_sizes
+from hoseline.procedures.variation.quantities import PoseReadings, Quantity, natural_scale
+from hoseline.procedures.variation.samples import StudyBase, placement_readings
+from hoseline.procedures.variation.sensitivity import (Sensitivities, _tangent, perturbed_finals,
+                                                      placement_sensitivities, step_sizes)
 from hoseline.procedures.variation.statistics import NEGLIGIBLE
 from hoseline.procedures.variation.tolerances import COORDINATES
 
@@ -80,7 +81,8 @@ def per_pose_values(readings: PoseReadings) -> np.ndarray:
     """(q, M) per smooth quantity (PoseReadings.smooth_values order) its value at every pose, signed so that the
     quantity over the sweep is the minimum over the poses (the largest torque and twisting moment negated)."""
     pose = readings.per_pose()
-    return np.vstack([readings.clearance, pose["bend_radius"], -pose["end_torque"], -pose["twisting_moment"]])
+    return np.vstack([readings.clearance, pose["bend_radius"], -pose["end_torque"], -pose["twisting_moment"],
+                      -readings.forces.T, -readings.moments.T])
 
 
 def kinks(smooth: tuple[Quantity, ...], readings: PoseReadings, length: float,
@@ -128,9 +130,10 @@ def sweep_sensitivities(sweep: SweepProblem, varied: tuple[int, ...]) -> Sensiti
     per_pose = [reader.read(problem, props, clamps, state, k) for k, (clamps, state) in enumerate(equilibria)]
     whole = PoseReadings(*(np.concatenate([getattr(r, name) for r in per_pose], axis=axis) for name, axis in
                            (("centerlines", 0), ("bend_radius", 0), ("twisting_moment", 0), ("end_moment", 0),
-                            ("end_direction", 0), ("clearance", 1))), problem.hose.torsional_stiffness)
+                            ("end_direction", 0), ("clearance", 1))), problem.hose.torsional_stiffness,
+                         *(np.concatenate([getattr(r, name) for r in per_pose]) for name in ("forces", "moments")))
     values = whole.smooth_values()
-    smooth = tuple(q for q in quantities(tuple(o.name for o in sweep.obstacles)) if q.name != "deviation")
+    smooth = tuple(q for q in StudyBase(problem, sweep).quantities if q.name != "deviation")
     names = tuple(q.name for q in smooth)
     hose = problem.hose
     active, notes = kinks(smooth, whole, hose.length, max(hose.bending_stiffness, hose.torsional_stiffness))
@@ -167,3 +170,11 @@ def sweep_sensitivities(sweep: SweepProblem, varied: tuple[int, ...]) -> Sensiti
                 station_derivatives[:, :, j] = (read[0].centerlines[0] - read[1].centerlines[0]) / (2 * h)
     return Sensitivities(names, values, derivatives, whole.centerlines[0], station_derivatives, tuple(notes))
 
+
+
+def study_sensitivities(base: StudyBase, problem: Problem, varied: tuple[int, ...]) -> Sensitivities:
+    """The sensitivities of `problem`'s hose (the base's or a deviated one) in the base's setting: its placement
+    (with the base's fixed obstacles) or its sweep (sensitivity.placement_sensitivities, sweep_sensitivities)."""
+    if base.sweep is None:
+        return placement_sensitivities(problem, varied, base.obstacles)
+    return sweep_sensitivities(replace(base.sweep, problem=problem), varied)
