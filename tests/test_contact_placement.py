@@ -1,6 +1,5 @@
 """Contact from the problem file to the result: [contact] tables, placement with contact, the report per obstacle."""
 
-import re
 import tomllib
 
 import numpy as np
