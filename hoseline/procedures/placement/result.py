@@ -10,11 +10,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from hoseline.model.problem import Problem
 from hoseline.procedures.placement.orientation import orientation_angle_deg
+
+if TYPE_CHECKING:
+    from hoseline.procedures.placement.force_accuracy import ForceRefinement
 
 
 @dataclass(frozen=True)
@@ -269,7 +273,7 @@ class Result:
     clips: list[ClipReaction] = field(default_factory=list)
     contacts: list[ObstacleContact] = field(default_factory=list)
     obstacle_placement: list = field(default_factory=list)
-    force_refinement: object | None = None
+    force_refinement: ForceRefinement | None = None
 
     @property
     def stable(self) -> bool:

@@ -242,7 +242,7 @@ def _refined_for_forces(sequence: "_Sequence", placed: Result, final: Clamps, st
         sides = [choice.hose_side for choice in sequence.brought_in]
     else:
         sides = list(problem.contact_sides) or [None] * len(problem.contact)
-    weight = problem.hose.mass_per_length * float(np.linalg.norm(problem.gravity)) * 1e-3 * problem.hose.length  # N
+    weight = float(np.linalg.norm(final.line_weight)) * problem.hose.length  # N
     clamps, current = final, state
     for _ in range(DOUBLINGS):
         fine_problem = replace(problem, hose=replace(problem.hose, segments=2 * counts[-1]))
