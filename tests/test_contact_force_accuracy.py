@@ -129,3 +129,21 @@ def test_hoseline_solve_refines_and_reports_it(tmp_path):
     summary = json.loads((tmp_path / "out" / "result.json").read_text())["summary"]
     refinement = summary["contact"]["force_accuracy"]
     assert refinement["met"] and refinement["asked_percent"] == 0.5 and summary["segments"] == refinement["segments"][-1]
+
+
+def test_the_observed_order_reads_the_forces_refinement_and_stays_within_the_contact_s_and_the_rod_s():
+    """Three snapshots whose force errors fall as h^p: the order p back, clamped to [1, 2]; a change that does not
+    shrink gives 1."""
+    from hoseline.procedures.placement.accuracy import ContactSnapshot
+    from hoseline.procedures.placement.force_accuracy import observed_order
+
+    def shots(order, exact=np.array([1.0, 0.0, 2.0])):
+        return [ContactSnapshot(np.zeros(2), np.zeros((2, 3)), np.array([exact, -exact]) + 0.1 * h ** order,
+                                {"floor": 3.0 * exact + 0.2 * h ** order}) for h in (1.0, 0.5, 0.25)]
+
+    assert observed_order(*shots(1.5)) == pytest.approx(1.5)
+    assert observed_order(*shots(3.0)) == 2.0
+    assert observed_order(*shots(0.5)) == 1.0
+    growing = shots(1.5)
+    growing[2] = growing[0]
+    assert observed_order(*growing) == 1.0
