@@ -276,9 +276,10 @@ class Result:
     force_refinement: ForceRefinement | None = None
 
     @property
-    def stable(self) -> bool:
-        """True when the equilibrium is a local minimum of the energy (margin 0: neutral, e.g. free to turn)."""
-        return self.stability_margin >= 0.0
+    def stable(self) -> bool | None:
+        """True when the equilibrium is a local minimum of the energy (margin 0: neutral, e.g. free to turn); None
+        when the margin was not computed (a result built without it, as the studio's drag frames are)."""
+        return None if self.stability_margin is None else self.stability_margin >= 0.0
 
     @property
     def max_twisting_moment(self) -> float:
@@ -308,8 +309,8 @@ class Result:
             "lock_angle_deg": self.lock_angle_deg,
             "elastic_energy_Nmm": self.elastic_energy,
             "gravity_energy_Nmm": self.gravity_energy,
-            "stability_margin_N_per_rad2": float(self.stability_margin),
-            "stable": bool(self.stable),
+            "stability_margin_N_per_rad2": None if self.stability_margin is None else float(self.stability_margin),
+            "stable": None if self.stable is None else bool(self.stable),
             "unique": None if self.unique is None else bool(self.unique),
             "uniqueness": uniqueness_word(self.unique),
             **({"uniqueness_not_checked": self.unchecked} if self.unique is None else {}),
