@@ -229,3 +229,25 @@ def test_a_drag_of_the_end_skips_the_search_for_penetration_at_its_start_and_a_d
     aside = (np.array(fittings["point"]) + [0.0, 1.0, 0.0]).tolist()  # along the floor: one Newton solve
     session.apply(Target(type="set", seq=9, start={"point": aside, "quaternion": fittings["quaternion"]}))
     assert session.last_step.events == [] and len(searched) == 1 and np.allclose(searched[0][0], aside)
+
+
+def test_a_drags_state_sends_what_is_only_drawn_to_fewer_decimals_and_the_shape_in_full():
+    """A drag's state rounds the lay line and the colour maps to view.DRAWN_DECIMALS (their JSON is the shorter); the
+    centreline, the arc lengths and the readouts are the complete state's to the bit."""
+    from hoseline.studio.view import DRAWN_DECIMALS
+
+    session = Session(resting_hose())
+    session.add_obstacle("block", np.array([[0.0, 60.0, 0.0], [50.0, 60.0, 0.0], [0.0, 60.0, 50.0]]),
+                         np.array([[0, 1, 2]]), "test")  # a clearance colour map
+    dragged(session, [0.0, 10.0, -4.0])  # out of the plane: the lay line turns
+    drag, complete = state_message(session, complete=False), state_message(session)
+    for name, decimals in DRAWN_DECIMALS.items():
+        full = np.array(complete[name], dtype=float)
+        sent = np.array(drag[name], dtype=float)
+        assert np.all(np.isfinite(full) == np.isfinite(sent))
+        np.testing.assert_array_equal(sent, np.round(full, decimals))
+        assert not np.array_equal(sent, full)  # the complete state keeps every digit
+        assert len(repr(drag[name])) < 0.7 * len(repr(complete[name]))
+    for name in ("centerline", "s", "fittings"):
+        assert drag[name] == complete[name]
+    assert drag["readouts"]["min_clearance"] == complete["readouts"]["min_clearance"]
