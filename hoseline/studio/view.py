@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hoseline.model.motion import matrix_quaternion
-from hoseline.procedures.geometry.clearance_profile import clearance_profile
+from hoseline.procedures.geometry.profile_nearest import profile_and_nearest
 from hoseline.procedures.placement.result import Result
 from hoseline.studio.warnings import bend_limit, shape_warnings
 
@@ -156,10 +156,10 @@ def _clearances(session: "Session", nodes: np.ndarray, radius: float):
         local = pose.inverse().points(nodes)
         required = shown.obstacle.clearance
         scale = max(required, 1e-3 * session.problem.hose.length)  # a zero requirement: colour by distance
-        segments = clearance_profile(shown.index, local, radius, CLEARANCE_SCALE * scale) / scale
+        profile, found = profile_and_nearest(shown.index, local, radius, CLEARANCE_SCALE * scale)
+        segments = profile / scale
         stations = np.minimum(np.append(segments, segments[-1]), np.insert(segments, 0, segments[0]))
         ratio = np.minimum(ratio, stations)
-        found = shown.index.nearest(local, radius)
         nearest.append({"name": shown.obstacle.name, "distance": found.distance, "required": required, "s": found.s})
     return ratio, nearest
 
