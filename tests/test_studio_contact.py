@@ -188,3 +188,66 @@ def test_a_drag_sends_the_costly_readouts_pending_and_completes_them_when_it_pau
             assert readouts[key] == fresh[key]
         assert readouts["contacts"][0]["total_force"] == fresh["contacts"][0]["total_force"]
         assert ws.receive_json()["type"] == "comparison"
+
+
+def test_a_drags_result_leaves_the_gaps_unsearched_and_still_refuses_a_shape_inside_an_obstacle():
+    """A drag's result (Session.result(complete=False)) leaves each obstacle's smallest gap unsearched (NaN), with the
+    contact forces and gaps of the pairs as the complete result has them; it still checks that the hose enters
+    nothing (the solver's guarantee), by the cheaper penetration search: with the floor raised into the hose lying on
+    it, both results refuse the shape."""
+    from hoseline.procedures.placement.continuation import PlacementError
+
+    session = Session(resting_hose())
+    dragged(session, [0.0, 0.0, -4.0])
+    drag, complete = session.result(complete=False).contacts[0], session.result().contacts[0]
+    assert np.isnan(drag.min_gap) and 0.0 < complete.min_gap < np.inf
+    np.testing.assert_array_equal(drag.total_force, complete.total_force)
+    np.testing.assert_array_equal(drag.gap, complete.gap)
+    model = session.tracker.contact
+    raised = model.planes.copy()
+    raised[:, 2] += 2.0 * RADIUS  # the floor's point up by the hose's diameter: through the hose resting on it
+    session.tracker.contact = replace(model, planes=raised)
+    for complete in (False, True):
+        with pytest.raises(PlacementError, match="solver error"):
+            session.result(complete)
+
+
+def test_a_drag_of_the_end_skips_the_search_for_penetration_at_its_start_and_a_drag_of_the_start_does_not(
+        monkeypatch):
+    """The solve of a drag's step starts from the equilibrium tracked, which clears the obstacles; moving the end
+    fitting leaves it where it was, so it is not searched for penetration again, but moving the start fitting carries
+    the whole hose along with it (the solve's start under the new clamps), so that start is searched."""
+    from hoseline.mechanics.contact_newton import ContactModel
+
+    session = Session(resting_hose())
+    searched = []
+    original = ContactModel.penetration
+    monkeypatch.setattr(ContactModel, "penetration", lambda model, nodes: searched.append(nodes) or original(model, nodes))
+    dragged(session, [0.0, 0.0, -4.0])
+    assert searched == []
+    fittings = state_message(session)["fittings"]["start"]
+    aside = (np.array(fittings["point"]) + [0.0, 1.0, 0.0]).tolist()  # along the floor: one Newton solve
+    session.apply(Target(type="set", seq=9, start={"point": aside, "quaternion": fittings["quaternion"]}))
+    assert session.last_step.events == [] and len(searched) == 1 and np.allclose(searched[0][0], aside)
+
+
+def test_a_drags_state_sends_what_is_only_drawn_to_fewer_decimals_and_the_shape_in_full():
+    """A drag's state rounds the lay line and the colour maps to view.DRAWN_DECIMALS (their JSON is the shorter); the
+    centreline, the arc lengths and the readouts are the complete state's to the bit."""
+    from hoseline.studio.view import DRAWN_DECIMALS
+
+    session = Session(resting_hose())
+    session.add_obstacle("block", np.array([[0.0, 60.0, 0.0], [50.0, 60.0, 0.0], [0.0, 60.0, 50.0]]),
+                         np.array([[0, 1, 2]]), "test")  # a clearance colour map
+    dragged(session, [0.0, 10.0, -4.0])  # out of the plane: the lay line turns
+    drag, complete = state_message(session, complete=False), state_message(session)
+    for name, decimals in DRAWN_DECIMALS.items():
+        full = np.array(complete[name], dtype=float)
+        sent = np.array(drag[name], dtype=float)
+        assert np.all(np.isfinite(full) == np.isfinite(sent))
+        np.testing.assert_array_equal(sent, np.round(full, decimals))
+        assert not np.array_equal(sent, full)  # the complete state keeps every digit
+        assert len(repr(drag[name])) < 0.7 * len(repr(complete[name]))
+    for name in ("centerline", "s", "fittings"):
+        assert drag[name] == complete[name]
+    assert drag["readouts"]["min_clearance"] == complete["readouts"]["min_clearance"]

@@ -12,6 +12,7 @@ from hoseline.mechanics.newton import solve_equilibrium
 from hoseline.mechanics.rotations import rotation_matrix
 from hoseline.procedures.geometry.clearance import TriangleIndex
 from hoseline.procedures.geometry.clearance_profile import clearance_profile
+from hoseline.procedures.geometry.profile_nearest import profile_and_nearest
 from hoseline.procedures.placement.continuation import PlacementError
 from hoseline.procedures.placement.sequence import solve
 from hoseline.procedures.placement.tracking import Fittings, Tracker, twisted
@@ -28,6 +29,24 @@ def test_clearance_profile_is_the_brute_force_distance_of_each_segment_up_to_the
     expected = [min(brute_force_nearest(nodes[i:i + 2], vertices, faces) - radius, cutoff) for i in range(len(nodes) - 1)]
     assert np.allclose(profile, expected, atol=1e-9)
     assert profile.min() == pytest.approx(min(index.nearest(nodes, radius).distance, cutoff), abs=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("cutoff", [0.5, 20.0, 1e3])
+def test_the_nearest_approach_found_with_the_profile_is_the_whole_hoses(seed, cutoff):
+    """profile_and_nearest searches only the segment the profile found nearest when it is within the cut-off, else the
+    whole hose: the same distance, arc length and points as TriangleIndex.nearest, and the same profile."""
+    rng = np.random.default_rng(seed)
+    vertices, faces = random_mesh(rng, 200, rng.normal(size=3) * 30.0, 15.0)
+    index = TriangleIndex(vertices, faces)
+    nodes = random_hose(rng)
+    radius = 2.0
+    profile, found = profile_and_nearest(index, nodes, radius, cutoff)
+    whole = index.nearest(nodes, radius)
+    np.testing.assert_array_equal(profile, clearance_profile(index, nodes, radius, cutoff))
+    assert (found.distance, found.s) == (whole.distance, whole.s)
+    np.testing.assert_array_equal(found.on_hose, whole.on_hose)
+    np.testing.assert_array_equal(found.on_obstacle, whole.on_obstacle)
 
 
 @pytest.fixture(scope="module")

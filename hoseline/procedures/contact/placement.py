@@ -118,13 +118,15 @@ def _entered(model: ContactModel, nodes: np.ndarray) -> list[str]:
 
 
 def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, state: RodState,
-                    model: ContactModel) -> tuple[list[ObstacleContact], np.ndarray]:
+                    model: ContactModel, smallest_gaps: bool = True) -> tuple[list[ObstacleContact], np.ndarray]:
     """(reports, forces beyond): one ObstacleContact per obstacle of the problem (and "self" with self-contact) at
     `state` (mm, N), its barrier pairs and where it carries its force (procedures/contact/extent.py); and the
     (N+1, 3) N sum of the contact forces on the part of the hose beyond each station (forces_beyond), from the
     same pairs.  A station's force (station-plane, station-triangle) at station k acts beyond the stations before
     k; a segment's force (on segment i, between stations i and i + 1) beyond stations 0..i; a self-contact pair
-    pushes its first segment and pulls the second the other way."""
+    pushes its first segment and pulls the second the other way.
+    smallest_gaps: False leaves each report's min_gap NaN (the search of every obstacle for its smallest gap saved, for
+    a result whose gaps are read later: a studio drag)."""
     h = props.segment_length
     nodes = centerline(state.frames, clamps.start_point, h)
     a_kinds, a_first, a_second, _ = model.pairs(nodes, model.activation)
@@ -140,7 +142,7 @@ def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, stat
     hose = free_hose(h, nodes, state.frames, clamps.start_frame[2],
                      state.frames[-1, 2] if clamps.end_frame is None else clamps.end_frame[2],
                      _internal_force(props, clamps, state) + beyond, clamps.line_weight, props.stiffness[:2])
-    smallest = model.smallest_gaps(nodes)
+    smallest = model.smallest_gaps(nodes) if smallest_gaps else None
     names = [obstacle.name for obstacle in problem.contact] + (["self"] if problem.self_contact else [])
     kind_of = {obstacle.name: obstacle.kind for obstacle in problem.contact} | {"self": "self"}
     reports = []
@@ -150,7 +152,7 @@ def contact_reports(problem: Problem, props: RodProperties, clamps: Clamps, stat
         force = forces[mine]
         carried, touchdowns = carried_extent(hose, arc[mine], force, normal[mine], a_first[mine], last_station[mine])
         reports.append(ObstacleContact(
-            name=name, kind=kind_of[name], min_gap=smallest[name],
+            name=name, kind=kind_of[name], min_gap=smallest[name] if smallest_gaps else math.nan,
             arc_length=arc[mine], point=on_hose[mine], surface_point=on_other[mine],
             gap=active_gaps[mine], force=force, total_force=force.sum(axis=0),
             length_in_contact=float(sum(part.length for part in carried)), carried=tuple(carried),
@@ -178,6 +180,12 @@ def _forces_beyond(segments: int, kinds, first, second, forces) -> np.ndarray:
     return np.cumsum(acting[::-1], axis=0)[::-1][1:]
 
 
+def _solver_error(what: str) -> None:
+    """Raise the PlacementError of a converged shape that is not clear (`what` it does): the solver's guarantee failed."""
+    raise PlacementError(f"placement with contact: the converged shape {what}; this is a solver error, please report it "
+                         "with the problem file")
+
+
 def stability_margin_with_contact(props: RodProperties, clamps: Clamps, state: RodState, model: ContactModel) -> float:
     """Smallest eigenvalue of the Hessian with the barrier, on the tangent space of the constraints, per length
     (N/rad^2, as Result.stability_margin); zero (neutral) when it is within NEUTRAL of the largest magnitude
@@ -199,24 +207,24 @@ def with_contact(result: Result, props: RodProperties, clamps: Clamps, state: Ro
     stability: False leaves the rod's margin without the barrier in place (a dense eigenvalue problem saved), for a
     result whose forces only are read (the error estimates' other solves).
     locate_gaps: False leaves each obstacle's smallest gap to the whole assembly unlocated (min_gap NaN, its place None; the
-    search saved), for a result whose gaps are read later (a studio drag)."""
+    search saved, and the search of each obstacle for its smallest gap to the hose too: whether the hose enters anything
+    is then the cheaper ContactModel.penetration's), for a result whose gaps are read later (a studio drag)."""
     problem = result.problem
-    result.contacts, beyond = contact_reports(problem, props, clamps, state, model)
+    result.contacts, beyond = contact_reports(problem, props, clamps, state, model, smallest_gaps=locate_gaps)
+    nodes = centerline(state.frames, clamps.start_point, props.segment_length)
+    if not locate_gaps and (inside := model.penetration(nodes)) is not None:
+        _solver_error(f"is not clear: {inside}")
     gaps = [contact.min_gap for contact in result.contacts]
-    if gaps and min(gaps) < 0.0:
+    if locate_gaps and gaps and min(gaps) < 0.0:
         worst = result.contacts[int(np.argmin(gaps))]
-        raise PlacementError(f"placement with contact: the converged shape enters {worst.name!r} by {-worst.min_gap:.3g} mm; "
-                             "this is a solver error, please report it with the problem file")
+        _solver_error(f"enters {worst.name!r} by {-worst.min_gap:.3g} mm")
     if locate_gaps:
-        nodes = centerline(state.frames, clamps.start_point, props.segment_length)
         nearest = nearest_gaps(problem, model, nodes)  # the whole assembly: fittings and the start station too
         result.contacts = [contact if contact.name not in nearest else
                            replace(contact, min_gap=min(contact.min_gap, nearest[contact.name].gap),
                                    min_gap_on=nearest[contact.name].on,
                                    min_gap_arc_length=nearest[contact.name].arc_length)
                            for contact in result.contacts]
-    else:
-        result.contacts = [replace(contact, min_gap=math.nan) for contact in result.contacts]
     result.internal_force = result.internal_force + beyond
     result.start_force = -result.internal_force[0]
     if stability:

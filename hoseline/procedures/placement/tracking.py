@@ -144,10 +144,14 @@ class Tracker:
         logged, counted = len(self.log.events), self.log.iterations
         state = self.state
         contact = _contact_model(problem, self.problem, self.contact)  # its stiffness follows the hose
+        # the equilibrium tracked clears every obstacle: under clamps from the same start point, with the same hose and
+        # obstacles, it is where it was, and the solve does not search it for penetration again
+        clear = (np.array_equal(clamps.start_point, self.clamps.start_point) and _same_properties(props, self.props)
+                 and _same_obstacles(contact, self.contact))
         try:
             if not _same_properties(props, self.props):
                 state = self._change_properties(self.props, props, self.clamps, state, contact)
-            state = self._move_fittings(props, self.clamps, clamps, state, contact)
+            state = self._move_fittings(props, self.clamps, clamps, state, contact, clear)
         except PlacementError:
             del self.log.events[logged:]
             raise
@@ -171,13 +175,14 @@ class Tracker:
         return result
 
     def _move_fittings(self, props: RodProperties, old: Clamps, new: Clamps, state: RodState,
-                       contact: ContactModel | None) -> RodState:
+                       contact: ContactModel | None, clear: bool = False) -> RodState:
         """The equilibrium under `new` clamps, from `state` in equilibrium under `old` (kept out of the
-        obstacles of `contact`, if given)."""
+        obstacles of `contact`, if given; clear: `state` under `new` is known to clear them)."""
         if contact is None:
             trial, report = solve_equilibrium(props, new, state)
         else:
-            trial, report = solve_with_contact(props, new, state, contact, tolerance=CONTACT_TOLERANCE)
+            trial, report = solve_with_contact(props, new, state, contact, tolerance=CONTACT_TOLERANCE,
+                                               start_is_clear=clear)
         self.log.iterations += report.iterations
         if report.converged:
             moved = np.max(np.linalg.norm(_stations(props, new, trial) - _stations(props, old, state), axis=1))
@@ -259,6 +264,13 @@ def _contact_model(problem: Problem, before: Problem | None = None, model: Conta
             and problem.hose.outer_radius == before.hose.outer_radius and len(problem.contact) == len(before.contact)
             and all(a is b for a, b in zip(problem.contact, before.contact)))
     return contact_placement.problem_contact_model(problem, model if same else None)
+
+
+def _same_obstacles(a: ContactModel | None, b: ContactModel | None) -> bool:
+    """Whether two contact models hold the same obstacles (the same arrays), hose radius and self-contact pairs: a hose
+    clear of one is clear of the other."""
+    return (a is not None and b is not None and a.hose_radius == b.hose_radius and a.self_exclusion == b.self_exclusion
+            and a.planes is b.planes and a.balls is b.balls and a.capsules is b.capsules and a.mesh is b.mesh)
 
 
 def twisted(frame: np.ndarray, twist_deg: float) -> np.ndarray:
