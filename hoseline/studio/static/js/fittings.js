@@ -55,12 +55,14 @@ export class FittingsView {
     this.gizmo.addEventListener('dragging-changed', (event) => {
       studioScene.orbit.enabled = !event.value;
       this.dragging = event.value;
+      if (event.value) studioScene.dragged();  // drawn at the drag's resolution before its first target goes
       if (!event.value && this.afterDrag) this.afterDrag();
       studioScene.requestRender();
     });
     this.gizmo.addEventListener('objectChange', () => {
       if (this.adjust) this.adjust(this.objects[this.selected]);  // snapping (snapping.js), before it is sent
       this.onDrag(this.selected, this.objects[this.selected]);
+      studioScene.dragged();
     });
     this.dragging = false;
     this.selected = null;
