@@ -7,17 +7,17 @@
 // drag at the rate of the frames), and the last drawing is MIN_INTERVAL_MS old; else at the next animation frame,
 // and a frame due while an answer is expected soon (awaitedUntil) waits for it, at most until then, and is drawn
 // as soon as it comes: one drawing shows the answer, taken in at once.  Drawn in software, a drag is drawn at half
-// the resolution until it pauses (dragged()): chromium's software compositing reads the WebGL canvas back on the
-// main thread when it commits a frame, waiting for the rasteriser, which held up pointer moves and answers.
+// the resolution until it pauses (dragged()): each frame's commit holds the main thread the longer the larger the
+// canvas, and held up pointer moves and answers.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { StaticLayer } from './static_layer.js';
 
 const MIN_INTERVAL_MS = 8;  // between drawings made at once, outside the animation frames (half a frame at 60 Hz)
 // Drawn in software (no GPU), a drag is drawn at this share of the full resolution (in each direction) until it
-// pauses for PAUSE_MS or ends, then at full resolution again: the rasteriser's time and the read-back at each
-// commit go with the pixels (with the strut, a commit held the main thread 9 ms at full resolution, 3.6 at half),
-// and the rasteriser shares the CPU with the server's solver.
+// pauses for PAUSE_MS or ends, then at full resolution again: the rasteriser's time and each frame's commit go
+// with the pixels (with the strut, a commit held the main thread 9 ms at full resolution, 3.6-4.3 at half), and
+// the rasteriser shares the CPU with the server's solver.
 const DRAG_RESOLUTION = 0.5;
 const PAUSE_MS = 250;
 
