@@ -69,7 +69,9 @@ RECORD = """() => {
     for (const type of ['pointerrawupdate', 'pointermove']) {
         window.addEventListener(type, (event) => {
             const seen = performance.now(), coalesced = event.getCoalescedEvents();
-            for (const move of coalesced.length ? coalesced : [event]) window.benchMoves.push([move.timeStamp, seen, type]);
+            for (const move of coalesced.length ? coalesced : [event]) {
+                window.benchMoves.push([move.timeStamp, seen, type]);
+            }
         }, { capture: true });
     }
 }"""

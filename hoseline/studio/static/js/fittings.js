@@ -17,7 +17,10 @@ const RAW_MOVES = 'onpointerrawupdate' in window;
 class Gizmo extends TransformControls {
   constructor(camera, element) {
     super(camera, element);
-    if (RAW_MOVES) element.addEventListener('pointerrawupdate', (event) => { if (this.enabled) this.pointerMove(this._getPointer(event), true); });
+    if (!RAW_MOVES) return;
+    element.addEventListener('pointerrawupdate', (event) => {
+      if (this.enabled) this.pointerMove(this._getPointer(event), true);  // as the gizmo's own pointermove handler
+    });
   }
 
   pointerMove(pointer, raw = false) {
