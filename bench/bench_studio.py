@@ -7,11 +7,13 @@ headless chromium (software WebGL, no GPU) through Playwright (its async API, so
 on their ticks).  The mouse (page.mouse: input events that go through the browser as a user's do) takes the end
 fitting's gizmo by one of its arrows and drags it to and fro along it, 1 mm a move, first one move at a time
 (the next 100 ms after the last one's frame) and then at 60 Hz (a move every 1/60 s, as a steady hand drags).
-Timed in the page with performance.now(): each pointermove (a capture listener on the window; chromium hands
-the page at most one a frame, holding the moves since the last in its coalesced events, each timed from when
-the browser took it in, its timeStamp) and the page's marks (static/js/marks.js) of every target sent, state
-received and frame drawn.  A move's position goes out with the first target sent after the page saw it (at
-once, or merged into the next while one is in flight), so for each move:
+Timed in the page with performance.now(): each move, timed from when the browser took it in (the event's
+timeStamp), and when the page first saw it (capture listeners on the window, before the gizmo's): in a
+pointerrawupdate, dispatched as the browser takes the move in, which the studio's drag follows where the browser
+has it, or in a pointermove (chromium hands the page at most one a frame, holding the moves since the last in its
+coalesced events, some 4 ms after they came at 60 Hz); and the page's marks (static/js/marks.js) of every target
+sent, state received and frame drawn.  A move's position goes out with the first target sent after the page saw it
+(at once, or merged into the next while one is in flight), so for each move:
 
     state received  the first state answering that target or a later one, less the move's time;
     shape drawn     the drawing of the view that shows it (its render call returned: at an animation frame, or at
@@ -57,16 +59,21 @@ CHROMIUM_ARGS = [
 AMPLITUDE_MM = 8  # the drag runs to and fro between -8 and +8 mm from where it took the arrow
 PAUSE_S = 0.1  # between the moves made one at a time
 
-# the timestamps: every mouse move the browser took in (chromium hands the page at most one pointermove a frame, the
-# moves since the last one in its coalesced events), when it took it in (the event's timeStamp) and when the page
-# saw it (before the gizmo does); and the page's own marks
+# the timestamps: every mouse move the browser took in, when it took it in (the event's timeStamp) and when the page
+# first saw it, in a pointerrawupdate (dispatched as the browser takes the move in; the studio's drag follows those
+# where the browser has them) or in a pointermove (chromium hands the page at most one a frame, the moves since the
+# last one in its coalesced events), before the gizmo does; and the page's own marks
 RECORD = """() => {
     window.benchMoves = [];
     window.studio.marks.list = [];
-    window.addEventListener('pointermove', (event) => {
-        const seen = performance.now(), coalesced = event.getCoalescedEvents();
-        for (const move of coalesced.length ? coalesced : [event]) window.benchMoves.push([move.timeStamp, seen]);
-    }, { capture: true });
+    for (const type of ['pointerrawupdate', 'pointermove']) {
+        window.addEventListener(type, (event) => {
+            const seen = performance.now(), coalesced = event.getCoalescedEvents();
+            for (const move of coalesced.length ? coalesced : [event]) {
+                window.benchMoves.push([move.timeStamp, seen, type]);
+            }
+        }, { capture: true });
+    }
 }"""
 FORGET = "() => { window.benchMoves.length = 0; window.studio.marks.list.length = 0; }"
 TAKE = "() => ({ moves: window.benchMoves.slice(), marks: window.studio.marks.list.slice() })"
@@ -169,8 +176,11 @@ def timings(taken: dict) -> dict:
     def first(events, seq):
         return next((at for at, s in events if s >= seq), None)
 
+    first_seen = {}  # when the browser took the move in -> when the page first saw it
+    for moved, seen, _ in taken["moves"]:
+        first_seen[moved] = min(seen, first_seen.get(moved, seen))
     carried = []  # (when the browser took the move in, seq of the first target sent after the page saw it)
-    for moved, seen in taken["moves"]:
+    for moved, seen in sorted(first_seen.items()):
         seq = next((s for at, s in sent if at >= seen), None)
         if seq is not None:
             carried.append((moved, seq))
@@ -184,11 +194,12 @@ def timings(taken: dict) -> dict:
             lags.append(at - max(shown))
     last_moved, last_seq = carried[-1]
     server = [1000 * detail for what, _, _, detail in marks if what == "received" and detail is not None]
-    moves = taken["moves"]
+    moves = sorted(first_seen)
     return {"sent": to_sent, "received": to_received, "drawn": to_drawn, "lag": lags, "last": first(drawn, last_seq) - last_moved,
             "server": server, "moves": len(carried), "targets": len(sent), "frames": len(drawn),
-            "rate": 1000.0 * (len(moves) - 1) / (moves[-1][0] - moves[0][0]),
-            "events": len({seen for _, seen in moves})}
+            "rate": 1000.0 * (len(moves) - 1) / (moves[-1] - moves[0]),
+            "events": {kind: len({seen for _, seen, type in taken["moves"] if type == kind})
+                       for kind in ("pointerrawupdate", "pointermove")}}
 
 
 def figures(values: list[float]) -> str:
@@ -219,8 +230,10 @@ async def measure(session: Session, work: Path, moves: int, playwright) -> None:
     print(f"    pointermove to state received  {figures(single['received'])}")
     print(f"    pointermove to shape drawn     {figures(single['drawn'])}")
     print(f"    in the solver thread           {figures(single['server'])}")
+    events = steady["events"]
     print(f"  at 60 Hz ({steady['moves']} moves, {steady['rate']:.0f} a second as the browser took them in, in "
-          f"{steady['events']} pointermove events; {steady['targets']} targets sent, {steady['frames']} frames drawn):")
+          f"{events['pointerrawupdate']} pointerrawupdate and {events['pointermove']} pointermove events; "
+          f"{steady['targets']} targets sent, {steady['frames']} frames drawn):")
     print(f"    pointermove to state received  {figures(steady['received'])}")
     print(f"    pointermove to shape drawn     {figures(steady['drawn'])}")
     print(f"    lag of the position drawn      {figures(steady['lag'])}; the last move drawn after {steady['last']:.1f} ms")

@@ -23,8 +23,8 @@ export class StaticLayer {
    * change of their matrices or count is seen, anything else needs forget(). */
   constructor(group) {
     this.group = group;
-    this.target = null;
-    this.key = null;
+    this.layers = new Map();  // 'width x height' of the drawing buffer -> {target, key, rectangle}: the last two sizes
+    this.layer = null;  // the one drawn last
     this.quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.ShaderMaterial({
       vertexShader: VERTEX, fragmentShader: FRAGMENT, uniforms: { colour: { value: null }, depth: { value: null } },
       transparent: true, depthTest: true, depthWrite: false, blending: THREE.CustomBlending,
@@ -37,46 +37,54 @@ export class StaticLayer {
   }
 
   /** Draw the layer afresh at the next frame. */
-  forget() { this.key = null; }
+  forget() { for (const layer of this.layers.values()) layer.key = null; }
 
-  /** Draw `scene` as seen by `camera`, the group from the layer (drawn into it first if stale). */
+  /** The rectangle of the canvas the group covers in the layer of the size drawn last (see onScreen). */
+  get rectangle() { return this.layer?.rectangle; }
+
+  /** Draw `scene` as seen by `camera`, the group from the layer of the drawing buffer's size (drawn into it first if
+   * stale).  A layer is kept for each of the last two sizes: the view drawn at a lower resolution during a drag
+   * (scene.js) finds its full-resolution layer still good after it. */
   render(renderer, scene, camera) {
     if (!this.group.children.length) { renderer.render(scene, camera); return; }
-    const size = renderer.getDrawingBufferSize(new THREE.Vector2());
-    if (!this.target || this.target.width !== size.x || this.target.height !== size.y) {
-      this.target?.dispose();
-      this.target = new THREE.WebGLRenderTarget(size.x, size.y, { depthTexture: new THREE.DepthTexture(size.x, size.y) });
-      this.quad.material.uniforms.colour.value = this.target.texture;
-      this.quad.material.uniforms.depth.value = this.target.depthTexture;
-      this.key = null;
+    const size = renderer.getDrawingBufferSize(new THREE.Vector2()), sizeKey = `${size.x}x${size.y}`;
+    let layer = this.layers.get(sizeKey);
+    if (!layer) {
+      const depthTexture = new THREE.DepthTexture(size.x, size.y);
+      layer = { target: new THREE.WebGLRenderTarget(size.x, size.y, { depthTexture }), key: null, rectangle: null };
+      this.layers.set(sizeKey, layer);
+      for (const [other, { target }] of [...this.layers].slice(0, -2)) { target.dispose(); this.layers.delete(other); }
     }
+    this.layer = layer;
+    this.quad.material.uniforms.colour.value = layer.target.texture;
+    this.quad.material.uniforms.depth.value = layer.target.depthTexture;
     scene.updateMatrixWorld();
     camera.updateMatrixWorld();
-    const key = [size.x, size.y, ...camera.matrixWorld.elements, ...camera.projectionMatrix.elements,
+    const key = [...camera.matrixWorld.elements, ...camera.projectionMatrix.elements,
       ...this.group.children.flatMap((child) => child.matrixWorld.elements)].join(',');
-    if (key !== this.key) {
-      this.drawLayer(renderer, scene, camera);
-      this.key = key;
-      this.rectangle = onScreen(new THREE.Box3().setFromObject(this.group), camera, renderer);
+    if (key !== layer.key) {
+      this.drawLayer(renderer, scene, camera, layer.target);
+      layer.key = key;
+      layer.rectangle = onScreen(new THREE.Box3().setFromObject(this.group), camera, renderer);
     }
     this.group.visible = false;
     renderer.render(scene, camera);
     this.group.visible = true;
     const autoClear = renderer.autoClear;
     renderer.autoClear = false;
-    renderer.setScissor(...this.rectangle);  // the layer's pixels only: a full-canvas pass costs the CPU too
+    renderer.setScissor(...layer.rectangle);  // the layer's pixels only: a full-canvas pass costs the CPU too
     renderer.setScissorTest(true);
     renderer.render(this.quadScene, this.quadCamera);
     renderer.setScissorTest(false);
     renderer.autoClear = autoClear;
   }
 
-  /** The group alone (with the scene's lights) into the layer, on a clear of nothing (colour 0, alpha 0). */
-  drawLayer(renderer, scene, camera) {
+  /** The group alone (with the scene's lights) into `target`, on a clear of nothing (colour 0, alpha 0). */
+  drawLayer(renderer, scene, camera, target) {
     const hidden = scene.children.filter((child) => child !== this.group && !child.isLight && child.visible);
     hidden.forEach((child) => { child.visible = false; });
     const background = renderer.getClearColor(new THREE.Color()), alpha = renderer.getClearAlpha();
-    renderer.setRenderTarget(this.target);
+    renderer.setRenderTarget(target);
     renderer.setClearColor(0x000000, 0);
     renderer.clear();
     renderer.render(scene, camera);
