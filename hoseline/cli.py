@@ -13,15 +13,13 @@ from __future__ import annotations
 import atexit
 import gc
 import os
-import threading
 
-START_UP_SECONDS = 1.0  # how long the collector stays off after the command starts
 FULL_COLLECTION_EVERY = 100  # collections of the middle generation per full collection (Python's default: 10)
 
 # Before NumPy loads: OpenBLAS (NumPy's and SciPy's own copies) otherwise starts a pool of threads per
 # library that spin after each call.  The solver's dense algebra is small and runs on one BLAS thread anyway
-# (mechanics/blas_threads.py); the pools cost a warm solve 0.2 s of CPU, and wall time under load.  A value
-# the user set is kept.
+# (mechanics/blas_threads.py); the pools cost a warm solve 0.2 s of CPU (of 0.8), and 0.02 s of wall time on a quiet
+# machine (0.60 -> 0.58 s, medians), more under load.  A value the user set is kept.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 # At exit the interpreter collects its garbage once more, walking every object left, Numba's compiler state
@@ -33,17 +31,10 @@ atexit.register(gc.freeze)
 # long as it does (NumPy's, Numba's, SciPy's modules, the kernels), and the default (one full collection per ten of
 # the middle generation) ran them over and over: 0.1 s of a solve's 0.8 s of CPU.  One per hundred.
 gc.set_threshold(*gc.get_threshold()[:2], FULL_COLLECTION_EVERY)
-# Start-up (the imports, loading the compiled kernels) makes almost no garbage, and the collector's passes over
-# what it makes still cost a warm solve 30-75 ms.  Collection is off for the command's first second and back on
-# after it, for the commands that run longer (a sweep, a study, a compile's garbage).
-gc.disable()
-_COLLECTOR_BACK_ON = threading.Timer(START_UP_SECONDS, gc.enable)
-_COLLECTOR_BACK_ON.daemon = True  # a quicker command does not wait for it
-_COLLECTOR_BACK_ON.start()
 
-import typer  # noqa: E402  (after the settings above: the commands' imports are start-up too)
+import typer  # noqa: E402
 
-from hoseline.commands import (  # noqa: E402
+from hoseline.commands import (  # noqa: E402  (after the setting above: the commands import NumPy)
     calibrate, compare, compile, demo, solve, studio, study, sweep, validation_demo,
 )
 
