@@ -284,3 +284,23 @@ def test_a_plain_placement_loads_only_the_placements_kernels():
     cache = numba.config.CACHE_DIR or compilation.version_folder().parent
     assert run_python(code, compilation.PACKAGE.parent, cache).splitlines() == [
         "[] []", "['bordered', 'clipped']"]
+
+
+def test_the_remembered_fingerprint_is_the_fingerprint_and_follows_every_edit(tmp_path):
+    """The fingerprint is noted with the modules' stamp (names, sizes, modification times): the note is read while
+    no module changed, and an edit, or a file only touched, makes it computed again."""
+    package = write_package(tmp_path, {"__init__.py": "", "kernels/rod.py": "import numba\nSCALE = 2.0\n",
+                                       "report/table.py": "WIDTH = 80\n"})
+    first = compilation.remembered_fingerprint(package)
+    assert first == compilation.fingerprint(package)
+    note = package / "__pycache__" / compilation.FINGERPRINT_NOTE
+    stamp = note.read_text().split()[0]
+    note.write_text(f"{stamp} noted\n")  # what is noted is what is read back, sources unread
+    assert compilation.remembered_fingerprint(package) == "noted"
+    os.utime(package / "report" / "table.py", ns=(0, 0))  # touched, not changed: computed again
+    assert compilation.remembered_fingerprint(package) == first
+    (package / "kernels" / "rod.py").write_text("import numba\nSCALE = 3.0\n")
+    assert compilation.remembered_fingerprint(package) == compilation.fingerprint(package) != first
+    note.unlink()
+    note.mkdir()  # a note that cannot be written: computed every time
+    assert compilation.remembered_fingerprint(package) == compilation.fingerprint(package)
