@@ -51,7 +51,7 @@ PACKAGE = Path(__file__).resolve().parent
 FOLDER_PREFIX = "hoseline-kernels-"
 KEEP_VERSIONS = 4  # version folders kept in a base (the most recently used)
 LOCATOR = f"{__name__}.KernelCacheLocator"
-FINGERPRINT_NOTE = "hoseline-kernels-fingerprint"  # in the package's __pycache__: source_stamp and fingerprint
+FINGERPRINT_NOTE = "hoseline-fingerprint"  # in the package's __pycache__ (not a version folder): stamp, fingerprint
 
 # a module with kernels imports numba; a from-import may name submodules (from hoseline.x import y)
 _USES_NUMBA = re.compile(r"^[ \t]*(?:from|import)[ \t]+numba\b", re.MULTILINE)

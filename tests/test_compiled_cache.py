@@ -304,3 +304,11 @@ def test_the_remembered_fingerprint_is_the_fingerprint_and_follows_every_edit(tm
     note.unlink()
     note.mkdir()  # a note that cannot be written: computed every time
     assert compilation.remembered_fingerprint(package) == compilation.fingerprint(package)
+
+
+def test_the_fingerprint_note_is_not_taken_for_a_version_folder(tmp_path):
+    for k in range(compilation.KEEP_VERSIONS):
+        (tmp_path / f"{compilation.FOLDER_PREFIX}{k}").mkdir()
+    (tmp_path / compilation.FINGERPRINT_NOTE).write_text("stamp fingerprint\n")
+    compilation.prune_versions(tmp_path)
+    assert len(list(tmp_path.iterdir())) == compilation.KEEP_VERSIONS + 1
