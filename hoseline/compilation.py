@@ -248,11 +248,19 @@ class KernelCacheLocator(UserProvidedCacheLocator):
     def __init__(self, py_func, py_file):
         self._py_file = py_file
         self._lineno = py_func.__code__.co_firstlineno
-        self._cache_path = str(version_folder() / Path(py_file).resolve().parent.relative_to(PACKAGE))
+        self._cache_path = str(version_folder() / _package_folder(py_file))
 
     def get_source_stamp(self):
         return _fingerprint()
 
     @classmethod
     def from_function(cls, py_func, py_file):
-        return cls(py_func, py_file) if Path(py_file).resolve().is_relative_to(PACKAGE) else None
+        return None if _package_folder(py_file) is None else cls(py_func, py_file)
+
+
+@functools.cache
+def _package_folder(py_file: str) -> Path | None:
+    # the folder of a source file relative to the package, None outside it; resolved once a file (each of its
+    # kernels asks, and a start-up defines over a hundred)
+    folder = Path(py_file).resolve().parent
+    return folder.relative_to(PACKAGE) if folder.is_relative_to(PACKAGE) else None
