@@ -10,8 +10,6 @@ export function focusOn(studioScene, point, radius) {
   camera.position.copy(point).addScaledVector(direction, distance);
   camera.near = distance / 100;
   camera.far = distance * 100;
-  camera.updateProjectionMatrix();
   orbit.target.copy(point);
-  orbit.update();
-  studioScene.requestRender();
+  studioScene.cameraMoved();
 }

@@ -32,10 +32,8 @@ export class Persisted {
     const { camera, orbit } = studioScene;
     camera.position.fromArray(kept.position);
     Object.assign(camera, { near: kept.near, far: kept.far });
-    camera.updateProjectionMatrix();
     orbit.target.fromArray(kept.target);
-    orbit.update();
-    studioScene.requestRender();
+    studioScene.cameraMoved();
     return true;
   }
 }

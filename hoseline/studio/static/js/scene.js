@@ -188,9 +188,17 @@ export class StudioScene {
     this.camera.position.copy(centre).addScaledVector(direction, distance);
     this.camera.near = distance / 100;
     this.camera.far = distance * 100;
-    this.camera.updateProjectionMatrix();
     this.orbit.target.copy(centre);
+    this.cameraMoved();
+  }
+
+  /** The camera was put somewhere by the page (a preset view, a focus, the view kept over a reload): its matrices
+   * made current at once, not at the next drawing, so that a pick (a click's raycast) before that drawing sees the
+   * view as it will be drawn, then drawn. */
+  cameraMoved() {
+    this.camera.updateProjectionMatrix();
     this.orbit.update();
+    this.camera.updateMatrixWorld();
     this.requestRender();
   }
 }
