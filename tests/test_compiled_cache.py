@@ -293,6 +293,10 @@ def test_the_remembered_fingerprint_is_the_fingerprint_and_follows_every_edit(tm
                                        "report/table.py": "WIDTH = 80\n"})
     first = compilation.remembered_fingerprint(package)
     assert first == compilation.fingerprint(package)
+    stamp = compilation.source_stamp(package)
+    (package / "kernels" / "__pycache__").mkdir()
+    (package / "kernels" / "__pycache__" / "cached.py").write_text("")  # the cache folders are not walked
+    assert compilation.source_stamp(package) == stamp
     note = package / "__pycache__" / compilation.FINGERPRINT_NOTE
     stamp = note.read_text().split()[0]
     note.write_text(f"{stamp} noted\n")  # what is noted is what is read back, sources unread
