@@ -15,7 +15,7 @@ def _number(value: float | None, digits: int = 4) -> str:
     return "n/a" if value is None else f"{value + 0.0:.{digits}g}"
 
 
-def _stability(result) -> str:
+def _stability(result: Result) -> str:
     """The margin and its verdict; n/a when it was not computed."""
     if result.stable is None:
         return "n/a"
@@ -48,7 +48,7 @@ ROWS: tuple[tuple[str, str, Callable[[Result], str]], ...] = (
     ("lock angle", "deg", lambda r: _fixed(r.lock_angle_deg)),
     ("elastic energy", "N*mm", lambda r: _number(r.elastic_energy)),
     ("gravity energy", "N*mm", lambda r: _number(r.gravity_energy)),
-    ("stability margin", "N/rad^2", lambda r: _stability(r)),
+    ("stability margin", "N/rad^2", _stability),
     ("unique shape", "", lambda r: _uniqueness(r)),
     ("forks on the path", "", lambda r: str(len(r.path_forks))),
     ("min inside bend radius", "mm", lambda r: _fixed(r.min_bend_radius)),
